@@ -1,0 +1,390 @@
+"""Figures: ordered arcs and lines joined smoothly or at cusps, optionally repeated N-fold.
+
+A :class:`Curve` is one stroke on the ice. Consecutive pieces meet at a :class:`Join`:
+
+- ``smooth``: the sleigh keeps moving through the join (the tangent is continuous);
+- ``cusp``: the sleigh comes to rest; the blade may then pivot by ``pivot`` radians, and/or
+  ``reverse`` (move on backwards, drawing a true cusp with the tangent reversed, no rotation).
+
+A curve may be repeated ``repeat`` times, copy ``k`` being the unit carried on by the same rigid
+motion; ``closing`` is the join between copies and back to the start. A :class:`Figure` is a
+collection of curves. The JSON form is documented in the README (schema ``skatetrace.figure/1``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import FigureFormatError
+from .geometry import Pose, Segment, advance, rigid_motion_centre
+from .model import SleighParams
+
+__all__ = ["Join", "Curve", "Figure", "Placed", "Section", "SMOOTH", "figure_from_dict", "load_figure"]
+
+SCHEMA = "skatetrace.figure/1"
+
+
+@dataclass(frozen=True, slots=True)
+class Join:
+    """How two consecutive pieces meet. ``pivot`` in radians (positive turns left)."""
+
+    kind: str = "cusp"
+    pivot: float = 0.0
+    reverse: bool = False
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("smooth", "cusp"):
+            raise FigureFormatError(f"join kind must be 'smooth' or 'cusp', got {self.kind!r}")
+        if not math.isfinite(self.pivot):
+            raise FigureFormatError(f"pivot must be finite, got {self.pivot!r}")
+        if self.kind == "smooth" and (self.pivot != 0.0 or self.reverse):
+            raise FigureFormatError("a smooth join cannot pivot or reverse; use a cusp")
+
+    @property
+    def is_cusp(self) -> bool:
+        return self.kind == "cusp"
+
+    def to_dict(self) -> dict[str, Any]:
+        if self.kind == "smooth":
+            return {"type": "smooth"}
+        out: dict[str, Any] = {"type": "cusp", "pivot_deg": math.degrees(self.pivot)}
+        if self.reverse:
+            out["reverse"] = True
+        return out
+
+
+SMOOTH = Join("smooth")
+
+
+@dataclass(frozen=True, slots=True)
+class Placed:
+    """A piece laid out on the ice: where it starts (travel direction) and which way the blade runs."""
+
+    index: int  # position in the expanded curve
+    segment: Segment
+    start: Pose  # start point and direction of travel
+    direction: int  # +1 blade runs forwards, -1 backwards (after an odd number of reversals)
+    join_before: Join | None  # None for the first piece
+
+
+@dataclass(frozen=True, slots=True)
+class Section:
+    """A maximal run of pieces joined smoothly: traced from rest to rest."""
+
+    pieces: tuple[Placed, ...]
+
+    @property
+    def segments(self) -> list[Segment]:
+        return [p.segment for p in self.pieces]
+
+    @property
+    def length(self) -> float:
+        return sum(p.segment.length for p in self.pieces)
+
+
+@dataclass(frozen=True, slots=True)
+class Curve:
+    """One stroke: pieces, the joins between them, and an optional N-fold repetition."""
+
+    pieces: tuple[Segment, ...]
+    joins: tuple[Join, ...] = ()
+    repeat: int = 1
+    closing: Join | None = None
+    start: Pose = Pose(0.0, 0.0, 0.0)
+    name: str = "curve"
+
+    def __post_init__(self) -> None:
+        if not self.pieces:
+            raise FigureFormatError(f"curve {self.name!r} has no pieces")
+        for i, seg in enumerate(self.pieces):
+            if not (math.isfinite(seg.length) and seg.length > 0):
+                raise FigureFormatError(
+                    f"curve {self.name!r}, piece {i}: length must be positive and finite, got {seg.length!r}"
+                )
+            if not math.isfinite(seg.curvature):
+                raise FigureFormatError(f"curve {self.name!r}, piece {i}: curvature must be finite")
+        if len(self.joins) != len(self.pieces) - 1:
+            raise FigureFormatError(
+                f"curve {self.name!r}: {len(self.pieces)} pieces need {len(self.pieces) - 1} joins, "
+                f"got {len(self.joins)}"
+            )
+        if not (isinstance(self.repeat, int) and self.repeat >= 1):
+            raise FigureFormatError(f"curve {self.name!r}: repeat must be a whole number >= 1, got {self.repeat!r}")
+        if self.repeat > 1 and self.closing is None:
+            raise FigureFormatError(f"curve {self.name!r}: a repeated curve needs a closing join")
+
+    def expanded(self) -> list[tuple[Segment, Join | None]]:
+        """All pieces of all copies, each with the join before it (``None`` first)."""
+        out: list[tuple[Segment, Join | None]] = []
+        for copy in range(self.repeat):
+            for i, seg in enumerate(self.pieces):
+                if i > 0:
+                    join = self.joins[i - 1]
+                elif copy > 0:
+                    join = self.closing
+                else:
+                    join = None
+                out.append((seg, join))
+        return out
+
+    def layout(self) -> list[Placed]:
+        """Place every piece on the ice."""
+        pose, direction, placed = self.start, 1, []
+        for i, (seg, join) in enumerate(self.expanded()):
+            if join is not None:
+                pose, direction = _apply_join(pose, direction, join)
+            placed.append(Placed(i, seg, pose, direction, join))
+            pose = Pose(*(float(v) for v in advance(pose, seg.curvature, seg.length)))
+        return placed
+
+    def end_pose(self) -> tuple[Pose, int]:
+        """Pose and blade direction after the last piece and, if repeated, the closing join."""
+        last = self.layout()[-1]
+        pose = Pose(*(float(v) for v in advance(last.start, last.segment.curvature, last.segment.length)))
+        direction = last.direction
+        if self.closing is not None:
+            pose, direction = _apply_join(pose, direction, self.closing)
+        return pose, direction
+
+    def sections(self) -> list[Section]:
+        """Split at cusps into runs traced from rest to rest."""
+        out: list[list[Placed]] = []
+        for p in self.layout():
+            if p.join_before is None or p.join_before.is_cusp:
+                out.append([])
+            out[-1].append(p)
+        return [Section(tuple(s)) for s in out]
+
+    def unit_centre(self) -> tuple[float, float] | None:
+        """Centre of the rotation that carries one copy onto the next (``None`` if a translation)."""
+        one = Curve(self.pieces, self.joins, 1, None, self.start, self.name)
+        pose, _ = one.end_pose()
+        if self.closing is not None:
+            pose, _ = _apply_join(pose, 1, self.closing)
+        return rigid_motion_centre(self.start, pose)
+
+    def closure(self) -> dict[str, Any]:
+        """How far the end of the curve is from its start (position and heading)."""
+        pose, direction = self.end_pose()
+        gap = math.hypot(pose.x - self.start.x, pose.y - self.start.y)
+        dh = math.remainder(pose.heading - self.start.heading, 2 * math.pi)
+        return {"position_gap": gap, "heading_gap": dh, "direction_restored": direction == 1,
+                "closed": gap <= 1e-9 * max(1.0, self.size()) and abs(dh) <= 1e-9}
+
+    def size(self) -> float:
+        """Diameter of the curve's bounding box (its larger side)."""
+        import numpy as np
+
+        from .geometry import segment_points
+
+        pts = np.hstack([segment_points(p.start, p.segment, 64) for p in self.layout()])
+        return float(max(np.ptp(pts[0]), np.ptp(pts[1]), 1e-300))
+
+    def centred_at(self, x: float, y: float) -> "Curve":
+        """The same curve moved so that its repetition centre sits at ``(x, y)``."""
+        c = self.unit_centre()
+        if c is None:
+            raise FigureFormatError(f"curve {self.name!r} has no rotation centre (its copies only translate)")
+        return Curve(self.pieces, self.joins, self.repeat, self.closing,
+                     Pose(self.start.x + x - c[0], self.start.y + y - c[1], self.start.heading), self.name)
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "name": self.name,
+            "start": {"x": self.start.x, "y": self.start.y, "heading_deg": math.degrees(self.start.heading)},
+            "pieces": [_segment_to_dict(s) for s in self.pieces],
+            "joins": [j.to_dict() for j in self.joins],
+        }
+        if self.repeat > 1:
+            out["repeat"] = self.repeat
+        if self.closing is not None:
+            out["closing_join"] = self.closing.to_dict()
+        return out
+
+
+@dataclass(frozen=True, slots=True)
+class Figure:
+    """A named collection of curves, with optional model parameters and provenance."""
+
+    name: str
+    curves: tuple[Curve, ...]
+    params: SleighParams | None = None
+    description: str = ""
+    provenance: str = ""
+    extra: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        if not self.curves:
+            raise FigureFormatError(f"figure {self.name!r} has no curves")
+
+    def size(self) -> float:
+        """Larger side of the bounding box of the whole figure."""
+        import numpy as np
+
+        from .geometry import segment_points
+
+        pts = np.hstack([segment_points(p.start, p.segment, 64) for c in self.curves for p in c.layout()])
+        return float(max(np.ptp(pts[0]), np.ptp(pts[1]), 1e-300))
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"schema": SCHEMA, "name": self.name}
+        if self.description:
+            out["description"] = self.description
+        if self.provenance:
+            out["provenance"] = self.provenance
+        if self.params is not None:
+            out["params"] = self.params.to_dict()
+        out["curves"] = [c.to_dict() for c in self.curves]
+        return out
+
+
+def _apply_join(pose: Pose, direction: int, join: Join) -> tuple[Pose, int]:
+    heading = pose.heading + join.pivot + (math.pi if join.reverse else 0.0)
+    return Pose(pose.x, pose.y, heading), (-direction if join.reverse else direction)
+
+
+def _segment_to_dict(seg: Segment) -> dict[str, Any]:
+    if seg.curvature == 0.0:
+        return {"type": "line", "length": seg.length}
+    return {"type": "arc", "curvature": seg.curvature, "length": seg.length}
+
+
+def _number(d: dict, key: str, where: str) -> float:
+    value = d[key]
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 1e300:
+        raise FigureFormatError(f"{where}: {key!r} is too large, got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise FigureFormatError(f"{where}: {key!r} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _segment_from_dict(d: Any, where: str) -> Segment:
+    if not isinstance(d, dict) or "type" not in d:
+        raise FigureFormatError(f"{where}: expected an object with 'type' ('arc' or 'line'), got {d!r}")
+    kind = d["type"]
+    if kind == "line":
+        length = _number(d, "length", where) if "length" in d else None
+        if length is None or length <= 0:
+            raise FigureFormatError(f"{where}: a line needs a positive 'length', got {d.get('length')!r}")
+        return Segment(0.0, length)
+    if kind != "arc":
+        raise FigureFormatError(f"{where}: piece type must be 'arc' or 'line', got {kind!r}")
+    if "curvature" in d:
+        k = _number(d, "curvature", where)
+        if k == 0.0:
+            raise FigureFormatError(f"{where}: an arc needs non-zero curvature; use a line")
+        if "length" not in d:
+            raise FigureFormatError(f"{where}: an arc given by curvature needs a 'length'")
+        length = _number(d, "length", where)
+    else:
+        if "radius" not in d:
+            raise FigureFormatError(f"{where}: an arc needs 'radius' (or 'curvature')")
+        r = _number(d, "radius", where)
+        if r <= 0:
+            raise FigureFormatError(f"{where}: radius must be positive, got {r!r}; turn right with a negative sweep")
+        if "sweep_deg" in d:
+            sweep = math.radians(_number(d, "sweep_deg", where))
+            if sweep == 0.0:
+                raise FigureFormatError(f"{where}: sweep_deg must be non-zero")
+            k, length = math.copysign(1.0 / r, sweep), r * abs(sweep)
+        elif "length" in d:
+            length = _number(d, "length", where)
+            turn = d.get("turn", "left")
+            if turn not in ("left", "right"):
+                raise FigureFormatError(f"{where}: turn must be 'left' or 'right', got {turn!r}")
+            k = 1.0 / r if turn == "left" else -1.0 / r
+        else:
+            raise FigureFormatError(f"{where}: an arc needs 'sweep_deg' or 'length'")
+    if not length > 0:
+        raise FigureFormatError(f"{where}: length must be positive, got {length!r}")
+    return Segment(k, length)
+
+
+def _join_from_dict(d: Any, where: str) -> Join:
+    if not isinstance(d, dict) or d.get("type") not in ("smooth", "cusp"):
+        raise FigureFormatError(f"{where}: a join is {{'type': 'smooth'}} or {{'type': 'cusp', ...}}, got {d!r}")
+    if d["type"] == "smooth":
+        if set(d) - {"type"}:
+            raise FigureFormatError(f"{where}: a smooth join cannot pivot or reverse; use a cusp, got {d!r}")
+        return SMOOTH
+    pivot = math.radians(_number(d, "pivot_deg", where)) if "pivot_deg" in d else 0.0
+    reverse = d.get("reverse", False)
+    if not isinstance(reverse, bool):
+        raise FigureFormatError(f"{where}: reverse must be true or false, got {reverse!r}")
+    return Join("cusp", pivot, reverse)
+
+
+def figure_from_dict(data: Any) -> Figure:
+    """Build a :class:`Figure` from its JSON form, with messages that name the faulty field."""
+    if not isinstance(data, dict):
+        raise FigureFormatError(f"a figure is a JSON object, got {type(data).__name__}")
+    schema = data.get("schema", SCHEMA)
+    if schema != SCHEMA:
+        raise FigureFormatError(f"unsupported figure schema {schema!r}; expected {SCHEMA!r}")
+    curves_in = data.get("curves")
+    if not isinstance(curves_in, list) or not curves_in:
+        raise FigureFormatError("a figure needs a non-empty list 'curves'")
+    params = None
+    if "params" in data:
+        p = data["params"]
+        if not isinstance(p, dict) or set(p) - {"M", "m", "I"}:
+            raise FigureFormatError(f"'params' must be an object with keys M, m, I; got {p!r}")
+        try:
+            params = SleighParams(**p)
+        except (TypeError, ValueError) as exc:
+            raise FigureFormatError(f"'params': {exc}") from None
+    curves = []
+    for ci, c in enumerate(curves_in):
+        where = f"curves[{ci}]"
+        if not isinstance(c, dict):
+            raise FigureFormatError(f"{where}: expected an object, got {c!r}")
+        pieces_in = c.get("pieces")
+        if not isinstance(pieces_in, list) or not pieces_in:
+            raise FigureFormatError(f"{where}: needs a non-empty list 'pieces'")
+        pieces = tuple(_segment_from_dict(p, f"{where}.pieces[{i}]") for i, p in enumerate(pieces_in))
+        joins_in = c.get("joins", [{"type": "cusp"}] * (len(pieces) - 1))
+        if not isinstance(joins_in, list):
+            raise FigureFormatError(f"{where}: 'joins' must be a list")
+        joins = tuple(_join_from_dict(j, f"{where}.joins[{i}]") for i, j in enumerate(joins_in))
+        repeat = c.get("repeat", 1)
+        if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+            raise FigureFormatError(f"{where}: repeat must be a whole number >= 1, got {repeat!r}")
+        closing = _join_from_dict(c["closing_join"], f"{where}.closing_join") if "closing_join" in c else None
+        if repeat > 1 and closing is None:
+            closing = Join("cusp")
+        start_in = c.get("start", {})
+        if not isinstance(start_in, dict):
+            raise FigureFormatError(f"{where}: 'start' must be an object with x, y, heading_deg")
+        start = Pose(
+            _number(start_in, "x", where) if "x" in start_in else 0.0,
+            _number(start_in, "y", where) if "y" in start_in else 0.0,
+            math.radians(_number(start_in, "heading_deg", where)) if "heading_deg" in start_in else 0.0,
+        )
+        curve = Curve(pieces, joins, repeat, closing, start, str(c.get("name", f"curve{ci}")))
+        if "centre" in c:
+            cen = c["centre"]
+            if not (isinstance(cen, list) and len(cen) == 2):
+                raise FigureFormatError(f"{where}: 'centre' must be [x, y]")
+            cxy = {"x": cen[0], "y": cen[1]}
+            curve = curve.centred_at(_number(cxy, "x", f"{where}.centre"), _number(cxy, "y", f"{where}.centre"))
+        curves.append(curve)
+    return Figure(str(data.get("name", "figure")), tuple(curves), params,
+                  str(data.get("description", "")), str(data.get("provenance", "")))
+
+
+def load_figure(path: str | Path) -> Figure:
+    """Read a figure from a JSON file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise FigureFormatError(f"cannot read figure file {str(path)!r}: {exc.strerror}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FigureFormatError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    return figure_from_dict(data)

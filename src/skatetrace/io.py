@@ -1,0 +1,122 @@
+"""Writing results: ``result.json``, ``controls.csv``, ``report.json``, written atomically.
+
+Every file is written to a temporary file in the same folder and then renamed, so an interrupted
+run never leaves a half-written result behind.
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .controls import ControlSchedule
+from .tracing import FigureTrace
+from .verify import VerificationReport
+
+__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "atomic_write", "result_dict", "write_results", "read_controls"]
+
+SCHEMA_VERSION = "skatetrace.result/1"
+CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2")
+
+
+def atomic_write(path: str | Path, data: str | bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and an atomic rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mode = "wb" if isinstance(data, bytes) else "w"
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8", "newline": ""})) as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _clean(obj: Any) -> Any:
+    """JSON-safe copy: numpy scalars to Python, non-finite floats to None."""
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def result_dict(trace: FigureTrace, states: dict[str, np.ndarray] | None = None) -> dict[str, Any]:
+    """Everything needed to understand and reproduce a traced figure, as plain data."""
+    sections = []
+    for sec, t0 in zip(trace.sections, trace.start_times):
+        d = sec.to_dict()
+        d["start_time"] = t0
+        if sec.phases:
+            v = sec.evaluate(np.array([0.0]))
+            d["initial_state"] = {k: float(v[k][0]) for k in ("p1", "p2", "theta", "x", "y", "a", "b", "adot", "bdot")}
+        join = sec.section.pieces[0].join_before
+        d["join_before"] = join.to_dict() if join is not None else None
+        sections.append(d)
+    return _clean({
+        "schema": SCHEMA_VERSION,
+        "success": trace.success, "status": trace.status, "message": trace.message,
+        "params": trace.params.to_dict(),
+        "options": {"speed": trace.options.speed, "maneuver_length": trace.options.maneuver_length,
+                    "glide_lateral": trace.options.glide_lateral, "residual_tol": trace.options.residual_tol},
+        "figure": trace.figure.to_dict(),
+        "duration": trace.duration,
+        "sections": sections,
+    })
+
+
+def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
+    buf = _io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(CSV_COLUMNS)
+    cols = {"piece": schedule.piece, "t": schedule.t, "a": schedule.a, "b": schedule.b,
+            "adot": schedule.adot, "bdot": schedule.bdot, **states}
+    for i in range(schedule.t.size):
+        w.writerow([int(cols["piece"][i])] + [repr(float(cols[k][i])) for k in CSV_COLUMNS[1:]])
+    return buf.getvalue()
+
+
+def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,
+                  states: dict[str, np.ndarray], report: VerificationReport | None) -> list[Path]:
+    """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``."""
+    out = Path(out)
+    written = []
+    atomic_write(out / "result.json", json.dumps(result_dict(trace), indent=2))
+    written.append(out / "result.json")
+    atomic_write(out / "controls.csv", _csv_text(schedule, states))
+    written.append(out / "controls.csv")
+    if report is not None:
+        atomic_write(out / "report.json", json.dumps(_clean({"schema": "skatetrace.report/1", **report.to_dict()}), indent=2))
+        written.append(out / "report.json")
+    return written
+
+
+def read_controls(path: str | Path) -> dict[str, np.ndarray]:
+    """Read ``controls.csv`` back into columns (``piece`` as int)."""
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as fh:
+        rows = list(csv.reader(fh))
+    if not rows or tuple(rows[0]) != CSV_COLUMNS:
+        raise ValueError(f"{path}: expected header {','.join(CSV_COLUMNS)}")
+    data = np.array(rows[1:], dtype=float).reshape(-1, len(CSV_COLUMNS))
+    out = {k: data[:, i] for i, k in enumerate(CSV_COLUMNS)}
+    out["piece"] = out["piece"].astype(int)
+    return out

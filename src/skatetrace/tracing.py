@@ -1,0 +1,394 @@
+"""Exact tracing of figures: controls under which the full dynamics follows every piece.
+
+Each section of a figure (pieces joined smoothly, from one cusp to the next) is traced from rest
+to rest as *launch, glide, stop* (see :mod:`skatetrace.maneuver`):
+
+1. a glide on the section's longest segment, the mass locked at ``(0, b_g)`` on an arc or
+   ``(a_g, 0)`` on a line, at the requested speed;
+2. a stop, integrated forwards from the glide through the rest of the section, whose ramp control
+   and duration are found by Newton's method so that the speed vanishes exactly at the section's end;
+3. a launch, the same integrated backwards from the glide to the section's start.
+
+The curvature condition holds by construction at every instant, so the blade follows the section
+exactly; the length and the zero end speeds are the boundary conditions of the Newton solves.
+A section traversed backwards (after a reversal) is solved forwards and mapped by the symmetry
+``(a, b, p2, xi2) -> -(a, b, p2, xi2)`` of the model (the sleigh's mass centre sits on the blade).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+import numpy as np
+
+from .figure import Curve, Figure, Section
+from .geometry import Pose, advance
+from .maneuver import ManeuverSolution, constrained_rates, glide_state, solve_stop
+from .model import SleighParams, mass_energy, velocities
+
+__all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
+
+
+class TraceStatus(Enum):
+    """Outcome of tracing a section; the value is the message."""
+
+    SUCCESS = "traced exactly"
+    NO_STOP = "no stop manoeuvre could end the section at rest"
+    NO_LAUNCH = "no launch manoeuvre could start the section from rest"
+    SINGULAR = "the mass approached the singular set of the control law"
+    RESIDUAL = "boundary conditions not met to the required tolerance"
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class TraceOptions:
+    """Options of the exact tracer.
+
+    Parameters
+    ----------
+    speed : float
+        Glide speed along the blade (model length per time unit). Time scaling is a symmetry of
+        the model, so this changes durations and rates, never the path of the mass.
+    maneuver_length : float or None
+        Arc length given to the launch and to the stop inside the glide segment. ``None`` chooses
+        ``min(L/2, radius)`` on an arc and ``min(L/2, sqrt(I/(M+m)))`` on a line.
+    glide_lateral : float
+        Lateral position ``b`` of the mass while gliding on an arc.
+    residual_tol : float
+        Largest accepted boundary-condition residual.
+    singular_limit : float
+        Closest allowed approach to the singular point, in units of ``sqrt(I/(M+m))``.
+    rtol, atol : float
+        Integration tolerances of the manoeuvres.
+    """
+
+    speed: float = 1.0
+    maneuver_length: float | None = None
+    glide_lateral: float = 0.0
+    residual_tol: float = 1e-10
+    singular_limit: float = 1e-3
+    rtol: float = 1e-12
+    atol: float = 1e-13
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.speed) and self.speed > 0):
+            raise ValueError(f"speed must be positive and finite, got {self.speed!r}")
+        if self.maneuver_length is not None and not (math.isfinite(self.maneuver_length) and self.maneuver_length > 0):
+            raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
+        for name in ("residual_tol", "singular_limit", "rtol", "atol"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class _Phase:
+    kind: str  # "launch", "glide", "stop"
+    t0: float  # section time (normalised, glide speed 1)
+    t1: float
+    maneuver: ManeuverSolution | None
+    s0: float  # section arc length at the phase's start
+    kappa: float = 0.0  # glide curvature
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SectionTrace:
+    """Controls that trace one section exactly, with the solver's report.
+
+    Times are local to the section and physical (scaled by ``speed``). Use :meth:`evaluate`
+    for the state and controls at any time and :meth:`breakpoints` for the instants where the
+    control rates may jump.
+    """
+
+    success: bool
+    status: TraceStatus
+    message: str
+    curve_index: int
+    section: Section
+    params: SleighParams
+    speed: float
+    glide: dict[str, Any]
+    phases: tuple[_Phase, ...] = ()
+    residuals: dict[str, float] = field(default_factory=dict)
+    metrics: dict[str, float] = field(default_factory=dict)
+    nfev: int = 0
+
+    @property
+    def direction(self) -> int:
+        return self.section.pieces[0].direction
+
+    @property
+    def duration(self) -> float:
+        return self.phases[-1].t1 / self.speed if self.phases else math.nan
+
+    @property
+    def length(self) -> float:
+        return self.section.length
+
+    def breakpoints(self) -> np.ndarray:
+        """Physical times of phase and segment boundaries (control rates may jump there)."""
+        out = [0.0]
+        for ph in self.phases:
+            if ph.maneuver is not None:
+                for leg in ph.maneuver.legs:
+                    for t in (leg.t0, leg.t1):
+                        out.append(self._section_time(ph, t))
+            out.append(ph.t1)
+        return np.unique(np.asarray(out)) / self.speed
+
+    def _section_time(self, ph: _Phase, t_local: float) -> float:
+        if ph.kind == "launch":
+            return t_local - ph.maneuver.duration  # duration < 0: t in [tau, 0] -> [0, -tau]
+        return ph.t0 + t_local
+
+    def evaluate(self, t) -> dict[str, np.ndarray]:
+        """State and controls at physical section times ``t`` (1-D array).
+
+        Returns a dict of arrays: ``p1, p2, theta, x, y, a, b, adot, bdot, s, xi1, xi2`` and
+        ``segment`` (index of the piece within the section). At a breakpoint the value from the
+        phase or leg that *starts* there is returned, except at the very end.
+        """
+        V = self.speed
+        tn = np.atleast_1d(np.asarray(t, dtype=float)) * V
+        n = tn.size
+        out = {k: np.empty(n) for k in ("p1", "p2", "a", "b", "adot", "bdot", "s")}
+        for i, ph in enumerate(self.phases):
+            last = i == len(self.phases) - 1
+            sel = (tn >= ph.t0) & ((tn < ph.t1) | (last & (tn <= ph.t1 + 1e-12)))
+            if not np.any(sel):
+                continue
+            if ph.kind == "glide":
+                a, b = self.glide["a"], self.glide["b"]
+                p = glide_state(self.params, ph.kappa, a, b, 1.0)
+                out["p1"][sel], out["p2"][sel] = p[0], p[1]
+                out["a"][sel], out["b"][sel] = a, b
+                out["adot"][sel] = out["bdot"][sel] = 0.0
+                out["s"][sel] = ph.s0 + (tn[sel] - ph.t0)
+                continue
+            man = ph.maneuver
+            tl = tn[sel] + man.duration if ph.kind == "launch" else tn[sel] - ph.t0
+            tl = np.clip(tl, min(0.0, man.duration), max(0.0, man.duration))
+            vals = {k: np.empty(tl.size) for k in out}
+            # At a shared boundary the leg that starts there (in section time) must win, so it is
+            # written last: forwards that is the later leg, backwards (a launch) the earlier one.
+            legs = man.legs if ph.kind != "launch" else man.legs[::-1]
+            for leg in legs:
+                lo, hi = min(leg.t0, leg.t1), max(leg.t0, leg.t1)
+                m = (tl >= lo) & (tl <= hi)
+                if not np.any(m):
+                    continue
+                y = leg.sol(tl[m])
+                ad, bd, _ = constrained_rates(self.params, leg.kappa, y[0], y[1], y[2], y[3], man.control(tl[m]))
+                for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
+                    vals[key][m] = val
+            vals["s"] = ph.s0 + (vals["s"] - (man.end[4] if ph.kind == "launch" else 0.0))
+            for k in out:
+                out[k][sel] = vals[k]
+        # physical scaling: momenta and rates scale with the speed
+        for k in ("p1", "p2", "adot", "bdot"):
+            out[k] *= V
+        return self._finish(out)
+
+    def _finish(self, out: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        pieces = self.section.pieces
+        ends = np.cumsum([p.segment.length for p in pieces])
+        s = np.clip(out["s"], 0.0, ends[-1])
+        seg = np.minimum(np.searchsorted(ends, s, side="right"), len(pieces) - 1)
+        x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
+        starts = np.concatenate([[0.0], ends[:-1]])
+        for i, p in enumerate(pieces):
+            m = seg == i
+            if np.any(m):
+                xs, ys, hs = advance(p.start, p.segment.curvature, s[m] - starts[i])
+                x[m], y[m], heading[m] = xs, ys, hs
+        d = self.direction
+        if d < 0:
+            for k in ("a", "b", "adot", "bdot", "p2"):
+                out[k] = -out[k]
+            heading = heading + math.pi
+        out.update(theta=heading, x=x, y=y, segment=seg)
+        xi1, xi2, _ = velocities(self.params, out["p1"], out["p2"], out["a"], out["b"], out["adot"], out["bdot"])
+        out["xi1"], out["xi2"] = xi1, xi2
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        phases = []
+        for ph in self.phases:
+            d: dict[str, Any] = {"kind": ph.kind, "t0": ph.t0 / self.speed, "t1": ph.t1 / self.speed}
+            if ph.maneuver is not None:
+                man = ph.maneuver
+                d.update(control="u = alpha * t (t from the glide, backwards for a launch)",
+                         alpha=man.params[0] * self.speed**2,
+                         duration=abs(man.duration) / self.speed,
+                         legs=[{"kappa": leg.kappa} for leg in man.legs],
+                         residuals=man.residuals, min_singular_distance=man.min_singular_distance)
+            else:
+                d.update(control="mass locked", kappa=ph.kappa)
+            phases.append(d)
+        return {
+            "success": self.success, "status": self.status.name, "message": self.message,
+            "curve": self.curve_index, "pieces": [p.index for p in self.section.pieces],
+            "direction": self.direction, "speed": self.speed, "glide": self.glide,
+            "phases": phases, "residuals": self.residuals, "metrics": self.metrics,
+        }
+
+
+def _auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> float:
+    cap = 1.0 / abs(kappa) if kappa != 0.0 else params.length_scale
+    return min(0.5 * length, cap)
+
+
+def trace_section(
+    params: SleighParams, section: Section, options: TraceOptions = TraceOptions(), curve_index: int = 0
+) -> SectionTrace:
+    """Find controls that trace ``section`` exactly from rest to rest.
+
+    Never raises for a section that cannot be traced: the result has ``success=False`` and a
+    message naming the reason.
+    """
+    segs = section.segments
+    g = int(np.argmax([s.length for s in segs]))
+    kg, Lg = segs[g]
+    ell = options.maneuver_length or _auto_maneuver_length(params, kg, Lg)
+    ell = min(ell, 0.5 * Lg)
+    if kg == 0.0:
+        # On a line the mass is ahead of the blade: a launch over ell moves it back by about
+        # (M + m) ell / m, which must not reach a = 0 (the singular point of a line).
+        glide_ab = (2.0 * (params.M + params.m) / params.m * ell + params.length_scale, 0.0)
+    else:
+        glide_ab = (0.0, options.glide_lateral)
+    glide_len = Lg - 2.0 * ell
+    before = [(segs[g].curvature, ell)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
+    after = [(segs[g].curvature, ell)] + [(s.curvature, s.length) for s in segs[g + 1:]]
+    kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
+    glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": glide_len, "kappa": kg,
+             "speed": options.speed}
+    with np.errstate(divide="ignore", invalid="ignore"):
+        stop = solve_stop(params, after, glide_ab, 1.0, **kw)
+        launch = solve_stop(params, before, glide_ab, 1.0, backward=True, **kw) if stop.legs else None
+    nfev = stop.nfev + (launch.nfev if launch else 0)
+    base = dict(curve_index=curve_index, section=section, params=params, speed=options.speed, glide=glide, nfev=nfev)
+    if not stop.legs:
+        return SectionTrace(success=False, status=TraceStatus.NO_STOP, message=stop.message, **base)
+    if launch is None or not launch.legs:
+        return SectionTrace(success=False, status=TraceStatus.NO_LAUNCH,
+                            message=launch.message if launch else "no launch", **base)
+    s_launch = sum(ell_ for _, ell_ in before)
+    t_l = -launch.duration
+    phases = (
+        _Phase("launch", 0.0, t_l, launch, 0.0),
+        _Phase("glide", t_l, t_l + glide_len, None, s_launch, kg),
+        _Phase("stop", t_l + glide_len, t_l + glide_len + stop.duration, stop, s_launch + glide_len),
+    )
+    residuals = {
+        "launch_start_speed": abs(launch.residuals["end_speed"]) * options.speed,
+        "stop_end_speed": abs(stop.residuals["end_speed"]) * options.speed,
+        "length": abs(launch.residuals["length"]) + abs(stop.residuals["length"]),
+    }
+    worst = max(residuals.values())
+    singular = min(launch.min_singular_distance, stop.min_singular_distance)
+    if not (launch.success and stop.success):
+        status, msg = TraceStatus.SINGULAR, (launch.message if not launch.success else stop.message)
+    elif worst > options.residual_tol:
+        status, msg = TraceStatus.RESIDUAL, f"largest residual {worst:.3g} > {options.residual_tol:.3g}"
+    else:
+        status, msg = TraceStatus.SUCCESS, TraceStatus.SUCCESS.value
+    trace = SectionTrace(
+        success=status is TraceStatus.SUCCESS, status=status, message=msg, phases=phases,
+        residuals=residuals, **base,
+    )
+    return _with_metrics(trace, singular)
+
+
+def _with_metrics(trace: SectionTrace, singular: float) -> SectionTrace:
+    t = np.linspace(0.0, trace.duration, 4001)
+    t = np.unique(np.concatenate([t, trace.breakpoints()]))
+    v = trace.evaluate(t)
+    ke = mass_energy(trace.params, v["xi1"], v["xi2"], v["a"], v["b"], v["adot"], v["bdot"])
+    metrics = {
+        "duration": trace.duration,
+        "length": trace.length,
+        "peak_abs_adot": float(np.max(np.abs(v["adot"]))),
+        "peak_abs_bdot": float(np.max(np.abs(v["bdot"]))),
+        "peak_mass_kinetic_energy": float(np.max(ke)),
+        "max_abs_a": float(np.max(np.abs(v["a"]))),
+        "max_abs_b": float(np.max(np.abs(v["b"]))),
+        "min_singular_distance": float(singular),
+        "min_speed_inside": float(np.min(np.abs(v["xi2"][1:-1]))) if t.size > 2 else 0.0,
+    }
+    return SectionTrace(
+        success=trace.success, status=trace.status, message=trace.message, curve_index=trace.curve_index,
+        section=trace.section, params=trace.params, speed=trace.speed, glide=trace.glide,
+        phases=trace.phases, residuals=trace.residuals, metrics=metrics, nfev=trace.nfev,
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FigureTrace:
+    """Traced sections of a whole figure, in skating order, with the time each one starts."""
+
+    figure: Figure
+    params: SleighParams
+    options: TraceOptions
+    sections: tuple[SectionTrace, ...]
+    start_times: tuple[float, ...]
+
+    @property
+    def success(self) -> bool:
+        return all(s.success for s in self.sections)
+
+    @property
+    def status(self) -> str:
+        return "success" if self.success else "failed"
+
+    @property
+    def message(self) -> str:
+        bad = [s for s in self.sections if not s.success]
+        if not bad:
+            return f"all {len(self.sections)} sections traced exactly"
+        return "; ".join(f"curve {s.curve_index} pieces {[p.index for p in s.section.pieces]}: {s.message}" for s in bad)
+
+    @property
+    def duration(self) -> float:
+        return self.start_times[-1] + self.sections[-1].duration if self.sections else 0.0
+
+
+def _section_key(params: SleighParams, section: Section, options: TraceOptions) -> tuple:
+    return (params, options, tuple((round(s.curvature, 14), round(s.length, 14)) for s in section.segments))
+
+
+def trace_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
+                 progress=None) -> FigureTrace:
+    """Trace every section of every curve of ``figure``.
+
+    Sections that are the same up to a rigid motion (same curvatures and lengths) are solved once.
+    A section that fails is reported and the others are still traced.
+
+    Parameters
+    ----------
+    params : SleighParams, optional
+        Defaults to the figure's own parameters, else the paper's ``M = 2, m = 1, I = 3``.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each section.
+    """
+    params = params or figure.params or SleighParams()
+    cache: dict[tuple, SectionTrace] = {}
+    traces, starts, t = [], [], 0.0
+    all_sections = [(ci, sec) for ci, curve in enumerate(figure.curves) for sec in curve.sections()]
+    for done, (ci, sec) in enumerate(all_sections, 1):
+        key = _section_key(params, sec, options)
+        if key not in cache:
+            cache[key] = trace_section(params, sec, options, ci)
+        proto = cache[key]
+        tr = SectionTrace(
+            success=proto.success, status=proto.status, message=proto.message, curve_index=ci, section=sec,
+            params=params, speed=proto.speed, glide=proto.glide, phases=proto.phases,
+            residuals=proto.residuals, metrics=proto.metrics, nfev=proto.nfev,
+        )
+        traces.append(tr)
+        starts.append(t)
+        t += tr.duration if tr.phases else 0.0
+        if progress is not None:
+            progress(done, len(all_sections))
+    return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))

@@ -1,0 +1,281 @@
+"""Independent verification: replay a control schedule through the full five equations.
+
+The replay knows nothing of how the controls were found. It reads the sampled schedule
+(:class:`~skatetrace.controls.ControlSchedule`, the content of ``controls.csv``), interpolates it by
+cubic Hermite splines, integrates eqs. (p1_eq)-(y_eq) with DOP853 at tight tolerances, and applies
+at each cusp only what the figure prescribes: the sleigh is at rest, the blade pivots by the
+join's angle, and the momenta are those of the mass's motion at rest. It then measures
+
+- the deviation from the target figure both ways (replayed points to the figure, figure to the
+  replayed path), per section and overall,
+- the speed at every cusp,
+- the drift of ``p1 + r p2`` on each arc and of ``p2`` on each line (both are invariants there).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.spatial import cKDTree
+
+from .controls import ControlSchedule, sample_adaptively
+from .geometry import distance_to_segment
+from .model import SleighParams, momenta, rhs, velocities
+from .tracing import FigureTrace
+
+__all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
+
+
+def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
+    """Sample every section's controls densely enough for cubic Hermite interpolation.
+
+    Returns the schedule and the matching solver states (``x, y, theta, p1, p2, xi1, xi2``) at the
+    same rows, for ``controls.csv``.
+    """
+    cols: dict[str, list] = {k: [] for k in ("t", "a", "b", "adot", "bdot", "section", "piece",
+                                              "x", "y", "theta", "p1", "p2", "xi1", "xi2")}
+    for si, (sec, t_start) in enumerate(zip(trace.sections, trace.start_times)):
+        if not sec.phases:
+            continue
+        bps = sec.breakpoints()
+        for lo, hi in zip(bps[:-1], bps[1:]):
+            # Evaluate strictly inside the interval so that both one-sided limits are sampled.
+            eps = 1e-13 * max(1.0, hi)
+
+            def fn(tt, _lo=lo, _hi=hi, _e=eps):
+                v = sec.evaluate(np.clip(tt, _lo + _e, _hi - _e) if _hi - _lo > 4 * _e else tt)
+                return v["a"], v["b"], v["adot"], v["bdot"]
+
+            ts = sample_adaptively(fn, lo, hi)
+            inner = np.clip(ts, lo + eps, hi - eps)
+            v = sec.evaluate(inner)
+            # exact end values where the section starts and stops (rest): take the true boundary
+            v_end = sec.evaluate(np.array([lo, hi]))
+            for k in ("a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2"):
+                col = v[k].copy()
+                if lo == 0.0:
+                    col[0] = v_end[k][0]
+                if hi == bps[-1]:
+                    col[-1] = v_end[k][-1]
+                cols[k].append(col)
+            cols["t"].append(t_start + ts)
+            cols["section"].append(np.full(ts.size, si))
+            cols["piece"].append(np.array([sec.section.pieces[i].index for i in v["segment"]]))
+    arr = {k: np.concatenate(v) if v else np.empty(0) for k, v in cols.items()}
+    schedule = ControlSchedule(t=arr["t"], a=arr["a"], b=arr["b"], adot=arr["adot"], bdot=arr["bdot"],
+                               section=arr["section"].astype(int), piece=arr["piece"].astype(int))
+    states = {k: arr[k] for k in ("x", "y", "theta", "p1", "p2", "xi1", "xi2")}
+    return schedule, states
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Replay:
+    """Dense samples of the replayed full dynamics: arrays of shape ``(n,)``, ``section`` labels."""
+
+    t: np.ndarray
+    state: np.ndarray  # (5, n): p1, p2, theta, x, y
+    controls: np.ndarray  # (4, n): a, b, adot, bdot
+    section: np.ndarray
+    piece: np.ndarray
+    solutions: tuple = field(default=(), repr=False)  # (t0, t1, OdeSolution, interpolant, section)
+
+    def velocities(self, params: SleighParams):
+        return velocities(params, self.state[0], self.state[1], *self.controls)
+
+
+def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13, atol: float = 1e-14,
+           points_per_unit: float = 400.0) -> Replay:
+    """Integrate the full dynamics under ``schedule``, applying the figure's cusps."""
+    params = trace.params
+    ts, states, ctrls, secs, pieces, sols = [], [], [], [], [], []
+    y = None
+    prev_section = None
+    for i0, i1 in schedule.chunks():
+        si = int(schedule.section[i0])
+        sec = trace.sections[si]
+        f = schedule.interpolant(i0, i1)
+        t0, t1 = float(schedule.t[i0]), float(schedule.t[i1 - 1])
+        a, b, ad, bd = (float(v) for v in f(t0))
+        if si != prev_section:
+            first = sec.section.pieces[0]
+            if y is None or first.join_before is None:
+                theta = first.start.heading + (math.pi if first.direction < 0 else 0.0)
+                x0, y0 = first.start.x, first.start.y
+            else:
+                theta = y[2] + first.join_before.pivot
+                x0, y0 = y[3], y[4]
+            p1, p2 = momenta(params, 0.0, 0.0, a, b, ad, bd)
+            y = np.array([p1, p2, theta, x0, y0])
+            prev_section = si
+
+        f_scalar = schedule.scalar_interpolant(i0, i1)
+        m_ = params.m
+
+        def f_rhs(t, yy, _f=f_scalar):
+            aa, bb, aad, bbd = _f(t)
+            xi1_, xi2_, eta_ = velocities(params, yy[0], yy[1], aa, bb, aad, bbd)
+            return [-m_ * eta_ * xi2_, m_ * eta_ * xi1_, xi1_, xi2_ * math.cos(yy[2]), xi2_ * math.sin(yy[2])]
+
+        sol = solve_ivp(f_rhs, (t0, t1), y, method="DOP853", rtol=rtol, atol=atol, dense_output=True)
+        length = float(np.sum(np.abs(np.diff(schedule.t[i0:i1]))))  # time span; dense sampling below
+        n = max(50, int(math.ceil((t1 - t0) * points_per_unit)))
+        tt = np.linspace(t0, t1, n)
+        ys = sol.sol(tt)
+        ts.append(tt)
+        states.append(ys)
+        ctrls.append(np.vstack(f(tt)))
+        secs.append(np.full(n, si))
+        idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
+        pieces.append(schedule.piece[i0:i1][idx])
+        sols.append((t0, t1, sol.sol, f, si))
+        y = sol.y[:, -1]
+        del length
+    return Replay(t=np.concatenate(ts), state=np.hstack(states), controls=np.hstack(ctrls),
+                  section=np.concatenate(secs), piece=np.concatenate(pieces), solutions=tuple(sols))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class VerificationReport:
+    """Checks of a traced figure against its independent replay. ``success`` if all pass."""
+
+    success: bool
+    status: str
+    message: str
+    figure_size: float
+    tolerance: float
+    max_deviation: float
+    max_deviation_to_figure: float
+    max_deviation_from_figure: float
+    max_cusp_speed: float
+    cusp_speeds: list[float]
+    sections: list[dict[str, Any]]
+    invariant_drift: list[dict[str, Any]]
+    replay: Replay | None = field(default=None, repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "success": self.success, "status": self.status, "message": self.message,
+            "figure_size": self.figure_size, "tolerance": self.tolerance,
+            "max_deviation": self.max_deviation,
+            "max_deviation_replay_to_figure": self.max_deviation_to_figure,
+            "max_deviation_figure_to_replay": self.max_deviation_from_figure,
+            "max_cusp_speed": self.max_cusp_speed, "cusp_speeds": self.cusp_speeds,
+            "sections": self.sections, "invariant_drift": self.invariant_drift,
+        }
+
+
+def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params: SleighParams) -> np.ndarray:
+    """Distance from target points (2, k) to the replayed path.
+
+    The nearest dense sample is found with a k-d tree; the distance is then minimised over the
+    cubic Hermite interpolant of the positions (velocities from the model) on the two adjacent
+    sample intervals, by golden-section search, so the chord error of a polyline does not count.
+    """
+    t = rep.t[mask]
+    st = rep.state[:, mask]
+    ctl = rep.controls[:, mask]
+    _, xi2, _ = velocities(params, st[0], st[1], *ctl)
+    vx, vy = xi2 * np.cos(st[2]), xi2 * np.sin(st[2])
+    x, y = st[3], st[4]
+    _, idx = cKDTree(np.vstack([x, y]).T).query(points.T)
+    best = np.hypot(x[idx] - points[0], y[idx] - points[1])
+    for j in (np.maximum(idx - 1, 0), idx):
+        k = np.minimum(j + 1, t.size - 1)
+        h = t[k] - t[j]
+        valid = h > 0
+        h = np.where(valid, h, 1.0)
+
+        def pos(u):  # u in [0, 1] along interval j..k
+            h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
+            px = h00 * x[j] + h10 * h * vx[j] + h01 * x[k] + h11 * h * vx[k]
+            py = h00 * y[j] + h10 * h * vy[j] + h01 * y[k] + h11 * h * vy[k]
+            return np.hypot(px - points[0], py - points[1])
+
+        g = (math.sqrt(5) - 1) / 2
+        lo, hi = np.zeros_like(h), np.ones_like(h)
+        for _ in range(50):
+            c, d = hi - g * (hi - lo), lo + g * (hi - lo)
+            left = pos(c) < pos(d)
+            hi, lo = np.where(left, d, hi), np.where(left, lo, c)
+        best = np.where(valid, np.minimum(best, pos(0.5 * (lo + hi))), best)
+    return best
+
+
+def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_tol: float = 1e-6) -> VerificationReport:
+    """Replay ``trace``'s controls through the full dynamics and measure everything.
+
+    Parameters
+    ----------
+    rel_tol : float
+        Allowed deviation from the figure as a fraction of the figure's size.
+    """
+    if schedule is None:
+        schedule, _ = schedule_from_trace(trace)
+    params = trace.params
+    size = trace.figure.size()
+    tol = rel_tol * size
+    rep = replay(trace, schedule)
+    xi1, xi2, _ = rep.velocities(params)
+    sections, drifts, cusp_speeds = [], [], []
+    dev_to, dev_from = 0.0, 0.0
+    for si, sec in enumerate(trace.sections):
+        m = rep.section == si
+        if not sec.phases or not np.any(m):
+            sections.append({"section": si, "traced": False, "message": sec.message})
+            continue
+        pts = rep.state[3:5, m]
+        d_to = np.full(pts.shape[1], np.inf)
+        targets = []
+        for p in sec.section.pieces:
+            d_to = np.minimum(d_to, distance_to_segment(pts, p.start, p.segment))
+            n = max(64, int(p.segment.length * 200))
+            from .geometry import segment_points
+
+            targets.append(segment_points(p.start, p.segment, n))
+        target = np.hstack(targets)
+        d_from = _figure_to_replay(target, rep, m, params)
+        idx = np.flatnonzero(m)
+        speeds = (abs(float(xi2[idx[0]])), abs(float(xi2[idx[-1]])))
+        cusp_speeds.extend(speeds)
+        sections.append({
+            "section": si, "traced": True, "pieces": [p.index for p in sec.section.pieces],
+            "max_deviation_replay_to_figure": float(d_to.max()),
+            "max_deviation_figure_to_replay": float(d_from.max()),
+            "start_speed": speeds[0], "end_speed": speeds[1],
+        })
+        dev_to, dev_from = max(dev_to, float(d_to.max())), max(dev_from, float(d_from.max()))
+        for p in sec.section.pieces:
+            mp = m & (rep.piece == p.index)
+            if np.count_nonzero(mp) < 2:
+                continue
+            k = p.segment.curvature
+            if k != 0.0:
+                inv = rep.state[0, mp] + rep.state[1, mp] / k
+                name = "p1 + r p2"
+            else:
+                inv = rep.state[1, mp]
+                name = "p2"
+            drifts.append({"piece": p.index, "invariant": name, "drift": float(np.ptp(inv)),
+                           "scale": float(np.max(np.abs(inv)) + 1e-300)})
+    max_dev = max(dev_to, dev_from)
+    max_cusp = max(cusp_speeds) if cusp_speeds else 0.0
+    speed_scale = trace.options.speed
+    problems = []
+    if not trace.success:
+        problems.append(trace.message)
+    if max_dev > tol:
+        problems.append(f"deviation {max_dev:.3g} exceeds {tol:.3g} ({rel_tol:g} x figure size {size:.4g})")
+    if max_cusp > 1e-8 * speed_scale:
+        problems.append(f"speed at a cusp {max_cusp:.3g} exceeds {1e-8 * speed_scale:.3g}")
+    ok = not problems
+    return VerificationReport(
+        success=ok, status="passed" if ok else "failed",
+        message="all checks passed" if ok else "; ".join(problems),
+        figure_size=size, tolerance=tol, max_deviation=max_dev, max_deviation_to_figure=dev_to,
+        max_deviation_from_figure=dev_from, max_cusp_speed=max_cusp, cusp_speeds=cusp_speeds,
+        sections=sections, invariant_drift=drifts, replay=rep,
+    )
