@@ -175,9 +175,14 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     cubic Hermite interpolant of the positions (velocities from the model) on the two adjacent
     sample intervals, by golden-section search, so the chord error of a polyline does not count.
     """
-    t = rep.t[mask]
-    st = rep.state[:, mask]
-    ctl = rep.controls[:, mask]
+    # Chunks share their end instants; drop the repeats so that every interval has length > 0
+    # (positions are continuous there, only the control rates jump).
+    idx_all = np.flatnonzero(mask)
+    keep = np.diff(rep.t[idx_all], prepend=-np.inf) > 0
+    sel = idx_all[keep]
+    t = rep.t[sel]
+    st = rep.state[:, sel]
+    ctl = rep.controls[:, sel]
     _, xi2, _ = velocities(params, st[0], st[1], *ctl)
     vx, vy = xi2 * np.cos(st[2]), xi2 * np.sin(st[2])
     x, y = st[3], st[4]

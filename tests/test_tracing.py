@@ -1,0 +1,121 @@
+"""Exact tracing of sections, re-simulated through the full dynamics by the independent replay."""
+
+import math
+
+import numpy as np
+import pytest
+
+from skatetrace import Curve, Figure, Join, Segment, SleighParams, TraceOptions, trace_figure, verify
+from skatetrace.patterns import pattern
+from skatetrace.tracing import trace_section
+from skatetrace.verify import schedule_from_trace
+
+P = SleighParams()
+
+
+def _single(seg, join=None):
+    return Figure("t", (Curve((seg,), name="t"),))
+
+
+@pytest.mark.parametrize("seg", [Segment(1 / 1.2, 1.1 * math.pi * 1.2), Segment(-1 / 0.8, 0.2 * math.pi * 0.8),
+                                 Segment(0.0, 2.0), Segment(1.0, math.pi)])
+def test_single_piece_is_traced_exactly_and_replays_onto_it(seg):
+    fig = _single(seg)
+    tr = trace_figure(fig, P)
+    assert tr.success, tr.message
+    sec = tr.sections[0]
+    assert max(sec.residuals.values()) <= 1e-10
+    rep = verify(tr)
+    assert rep.success, rep.message
+    assert rep.max_deviation <= 1e-8 * max(1.0, fig.size())
+    assert rep.max_cusp_speed <= 1e-8
+    # invariants of the replay: p1 + r p2 on arcs, p2 on lines
+    for d in rep.invariant_drift:
+        assert d["drift"] <= 1e-8 * max(1.0, d["scale"]), d
+
+
+def test_solver_curvature_condition_holds_along_the_section():
+    tr = trace_figure(_single(Segment(1 / 1.2, 2.0)), P)
+    sec = tr.sections[0]
+    t = np.linspace(0, sec.duration, 301)[1:-1]
+    v = sec.evaluate(t)
+    assert np.max(np.abs(v["xi1"] - v["xi2"] / 1.2)) < 1e-9
+    assert np.all(v["xi2"] > 0)  # the blade moves forwards inside the section
+    assert abs(sec.evaluate(np.array([0.0]))["xi2"][0]) < 1e-12
+    assert abs(sec.evaluate(np.array([sec.duration]))["xi2"][0]) < 1e-12
+
+
+def test_launch_is_the_mirror_of_the_stop():
+    """Time reversal with a -> -a maps a stop onto a launch (the sleigh's mass centre is on the blade)."""
+    tr = trace_figure(_single(Segment(1.0, 2.0)), P)
+    sec = tr.sections[0]
+    T = sec.duration
+    t = np.linspace(0, 0.3 * T, 50)
+    early, late = sec.evaluate(t), sec.evaluate(T - t)
+    np.testing.assert_allclose(early["a"], -late["a"], atol=1e-9)
+    np.testing.assert_allclose(early["b"], late["b"], atol=1e-9)
+
+
+def test_smooth_arc_arc_line_section():
+    fig = pattern("s-bend")
+    tr = trace_figure(fig, P)
+    assert len(tr.sections) == 1 and tr.success, tr.message
+    rep = verify(tr)
+    assert rep.success, rep.message
+    assert rep.max_deviation < 1e-8
+
+
+def test_reversal_traces_backwards():
+    rev = Join("cusp", 0.0, True)
+    fig = Figure("rev", (Curve((Segment(1.0, 2.0), Segment(1.0, 2.0)), (rev,), name="rev"),))
+    tr = trace_figure(fig, P)
+    assert tr.success
+    v = tr.sections[1].evaluate(np.linspace(0.1, tr.sections[1].duration - 0.1, 20))
+    assert np.all(v["xi2"] < 0)
+    rep = verify(tr)
+    assert rep.success, rep.message
+
+
+def test_time_scaling_changes_durations_not_paths():
+    fig = _single(Segment(1.0, 2.0))
+    slow = trace_figure(fig, P, TraceOptions(speed=1.0)).sections[0]
+    fast = trace_figure(fig, P, TraceOptions(speed=2.0)).sections[0]
+    assert fast.duration == pytest.approx(slow.duration / 2, rel=1e-12)
+    a = slow.evaluate(np.linspace(0, slow.duration, 30))
+    b = fast.evaluate(np.linspace(0, fast.duration, 30))
+    np.testing.assert_allclose(a["a"], b["a"], atol=1e-12)
+    np.testing.assert_allclose(2 * a["adot"], b["adot"], atol=1e-10)
+
+
+def test_singular_set_is_detected():
+    """With the mass gliding right at the singular point the tracer must refuse, not return garbage."""
+    k = 1.0
+    opts = TraceOptions(glide_lateral=-k * P.I / P.M)
+    tr = trace_figure(_single(Segment(k, 2.0)), P, opts)
+    assert not tr.success
+    assert tr.sections[0].status.name in {"SINGULAR", "NO_STOP", "NO_LAUNCH"}
+    assert tr.sections[0].message
+
+
+def test_failed_section_does_not_lose_the_others():
+    opts = TraceOptions(glide_lateral=-P.I / P.M)  # singular for curvature 1, harmless on the line
+    fig = Figure("mix", (Curve((Segment(0.0, 1.0), Segment(1.0, 2.0)), (Join("cusp"),), name="mix"),))
+    tr = trace_figure(fig, P, opts)
+    assert tr.sections[0].success and not tr.sections[1].success
+    rep = verify(tr)
+    assert not rep.success
+    assert rep.sections[0]["traced"] and rep.sections[0]["max_deviation_replay_to_figure"] < 1e-8
+
+
+@pytest.mark.slow
+def test_double_flower_end_to_end():
+    fig = pattern("double-flower")
+    tr = trace_figure(fig)
+    assert tr.success
+    assert max(max(s.residuals.values()) for s in tr.sections) <= 1e-10
+    rep = verify(tr)
+    assert rep.success, rep.message
+    assert rep.max_deviation <= 1e-6 * fig.size()
+    assert rep.max_cusp_speed <= 1e-8
+    for c in fig.curves:
+        assert c.closure()["closed"]
