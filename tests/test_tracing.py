@@ -119,3 +119,27 @@ def test_double_flower_end_to_end():
     assert rep.max_cusp_speed <= 1e-8
     for c in fig.curves:
         assert c.closure()["closed"]
+
+
+def test_smooth_inflection_s_curve():
+    """Arc into an arc of the opposite turn, joined smoothly: needs the glide on the accelerating side."""
+    fig = Figure("s", (Curve((Segment(1.0, 1.0), Segment(-1.0, 1.0)), (Join("smooth"),), name="s"),))
+    tr = trace_figure(fig, P)
+    assert tr.success, tr.message
+    rep = verify(tr)
+    assert rep.success, rep.message
+    assert rep.max_deviation < 1e-6
+
+
+def test_implausible_solutions_are_refused():
+    """A solve whose mass would wander off is reported as a failure, never returned as a success."""
+    fig = Figure("s3", (Curve((Segment(1.0, 1.5), Segment(-1.0, 1.5), Segment(1.0, 1.5)),
+                              (Join("smooth"), Join("smooth")), name="s3"),))
+    tr = trace_figure(fig, P)
+    sec = tr.sections[0]
+    if sec.success:  # if a solution is found it must be a real one
+        rep = verify(tr)
+        assert rep.success, rep.message
+    else:
+        assert sec.status.name in {"EXCURSION", "NO_STOP", "NO_LAUNCH", "SINGULAR", "RESIDUAL"}
+        assert sec.message

@@ -40,6 +40,7 @@ class TraceStatus(Enum):
     NO_LAUNCH = "no launch manoeuvre could start the section from rest"
     SINGULAR = "the mass approached the singular set of the control law"
     RESIDUAL = "boundary conditions not met to the required tolerance"
+    EXCURSION = "the mass would have to move implausibly far or the blade stall inside the section"
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -54,21 +55,28 @@ class TraceOptions:
     maneuver_length : float or None
         Arc length given to the launch and to the stop inside the glide segment. ``None`` chooses
         ``min(L/2, radius)`` on an arc and ``min(L/2, sqrt(I/(M+m)))`` on a line.
-    glide_lateral : float
-        Lateral position ``b`` of the mass while gliding on an arc.
+    glide_lateral : float or None
+        Lateral position ``b`` of the mass while gliding on an arc. ``None`` (default) tries
+        ``b = 0`` first, then positions on the side of the neighbouring curvature's singular point
+        from which the jump of the control rates at a smooth join speeds the sleigh up rather than
+        braking it (see :func:`trace_section`).
     residual_tol : float
         Largest accepted boundary-condition residual.
     singular_limit : float
         Closest allowed approach to the singular point, in units of ``sqrt(I/(M+m))``.
+    excursion_limit : float
+        Largest accepted distance of the mass from the contact point, in units of
+        ``max(sqrt(I/(M+m)), section length)``. Beyond it a solution is numerically meaningless.
     rtol, atol : float
         Integration tolerances of the manoeuvres.
     """
 
     speed: float = 1.0
     maneuver_length: float | None = None
-    glide_lateral: float = 0.0
+    glide_lateral: float | None = None
     residual_tol: float = 1e-10
     singular_limit: float = 1e-3
+    excursion_limit: float = 20.0
     rtol: float = 1e-12
     atol: float = 1e-13
 
@@ -77,7 +85,7 @@ class TraceOptions:
             raise ValueError(f"speed must be positive and finite, got {self.speed!r}")
         if self.maneuver_length is not None and not (math.isfinite(self.maneuver_length) and self.maneuver_length > 0):
             raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
-        for name in ("residual_tol", "singular_limit", "rtol", "atol"):
+        for name in ("residual_tol", "singular_limit", "excursion_limit", "rtol", "atol"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
 
@@ -239,41 +247,89 @@ def _auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> 
     return min(0.5 * length, cap)
 
 
+def _glide_candidates(params: SleighParams, segs, g: int, ell: float, options: TraceOptions) -> list[tuple[float, float]]:
+    """Locked mass positions to try for the glide on segment ``g``, most natural first.
+
+    At a smooth join from curvature k1 to k2 the control rates jump by ``D (k1 - k2) xi2 / |c|``
+    along ``c``; with the mass at ``(0, b)`` the jump moves the mass backwards (speeding the
+    sleigh up) iff ``b - b*`` has the sign of ``k1 - k2``, where ``b* = -k2 I / M`` is the singular
+    point of the new curvature. Gliding on that side lets a stop or launch carry through the join.
+    """
+    kg = segs[g].curvature
+    scale = params.length_scale
+    if kg == 0.0:
+        # On a line the mass is ahead of the blade: a launch over ell moves it back by about
+        # (M + m) ell / m, which must not reach a = 0 (the singular point of a line).
+        base = 2.0 * (params.M + params.m) / params.m * ell + scale
+        return [(base, 0.0), (2.0 * base, 0.0), (4.0 * base, 0.0)]
+    if options.glide_lateral is not None:
+        return [(0.0, options.glide_lateral)]
+    out = [0.0]
+    after = next((s.curvature for s in segs[g + 1:] if s.curvature != kg), None)
+    before = next((s.curvature for s in reversed(segs[:g]) if s.curvature != kg), None)
+    for k2 in (after, before):
+        if k2 is None:
+            continue
+        bstar = -k2 * params.I / params.M
+        sgn = math.copysign(1.0, kg - k2)
+        out += [bstar + sgn * d * scale for d in (1.0, 1.5, 2.5)]
+    seen: list[float] = []
+    for b in out:
+        if all(abs(b - c) > 1e-12 for c in seen):
+            seen.append(b)
+    return [(0.0, b) for b in seen]
+
+
 def trace_section(
     params: SleighParams, section: Section, options: TraceOptions = TraceOptions(), curve_index: int = 0
 ) -> SectionTrace:
     """Find controls that trace ``section`` exactly from rest to rest.
 
-    Never raises for a section that cannot be traced: the result has ``success=False`` and a
-    message naming the reason.
+    The glide is placed on each segment in turn (longest first) and at each candidate mass
+    position (:func:`_glide_candidates`) until a stop and a launch are both found. Never raises for
+    a section that cannot be traced: the result has ``success=False`` and the reason.
     """
     segs = section.segments
-    g = int(np.argmax([s.length for s in segs]))
-    kg, Lg = segs[g]
-    ell = options.maneuver_length or _auto_maneuver_length(params, kg, Lg)
-    ell = min(ell, 0.5 * Lg)
-    if kg == 0.0:
-        # On a line the mass is ahead of the blade: a launch over ell moves it back by about
-        # (M + m) ell / m, which must not reach a = 0 (the singular point of a line).
-        glide_ab = (2.0 * (params.M + params.m) / params.m * ell + params.length_scale, 0.0)
-    else:
-        glide_ab = (0.0, options.glide_lateral)
-    glide_len = Lg - 2.0 * ell
-    before = [(segs[g].curvature, ell)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
-    after = [(segs[g].curvature, ell)] + [(s.curvature, s.length) for s in segs[g + 1:]]
+    order = sorted(range(len(segs)), key=lambda i: -segs[i].length)
     kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
-    glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": glide_len, "kappa": kg,
-             "speed": options.speed}
-    with np.errstate(divide="ignore", invalid="ignore"):
-        stop = solve_stop(params, after, glide_ab, 1.0, **kw)
-        launch = solve_stop(params, before, glide_ab, 1.0, backward=True, **kw) if stop.legs else None
-    nfev = stop.nfev + (launch.nfev if launch else 0)
+    nfev = attempts = 0
+    first_failure = None
+    for g in order:
+        kg, Lg = segs[g]
+        ell = options.maneuver_length or _auto_maneuver_length(params, kg, Lg)
+        ell = min(ell, 0.5 * Lg)
+        before = [(kg, ell)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
+        after = [(kg, ell)] + [(s.curvature, s.length) for s in segs[g + 1:]]
+        for glide_ab in _glide_candidates(params, segs, g, ell, options):
+            glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell, "kappa": kg,
+                     "speed": options.speed}
+            with np.errstate(divide="ignore", invalid="ignore"):
+                stop = solve_stop(params, after, glide_ab, 1.0, **kw)
+                launch = solve_stop(params, before, glide_ab, 1.0, backward=True, **kw) if stop.success else None
+            nfev += stop.nfev + (launch.nfev if launch else 0)
+            attempts += 1
+            attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
+            if attempt.success:
+                return attempt
+            first_failure = first_failure or attempt
+    return SectionTrace(
+        success=False, status=first_failure.status,
+        message=first_failure.message + f" (tried {attempts} glide placements: every segment as the glide, "
+        "every candidate mass position)",
+        curve_index=curve_index, section=section, params=params, speed=options.speed, glide=first_failure.glide,
+        phases=first_failure.phases, residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=nfev,
+    )
+
+
+def _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev) -> SectionTrace:
     base = dict(curve_index=curve_index, section=section, params=params, speed=options.speed, glide=glide, nfev=nfev)
     if not stop.legs:
         return SectionTrace(success=False, status=TraceStatus.NO_STOP, message=stop.message, **base)
     if launch is None or not launch.legs:
-        return SectionTrace(success=False, status=TraceStatus.NO_LAUNCH,
-                            message=launch.message if launch else "no launch", **base)
+        return SectionTrace(success=False, status=TraceStatus.NO_LAUNCH if launch else TraceStatus.SINGULAR,
+                            message=launch.message if launch else stop.message, **base)
+    glide_len = glide["length"]
+    kg = glide["kappa"]
     s_launch = sum(ell_ for _, ell_ in before)
     t_l = -launch.duration
     phases = (
@@ -298,10 +354,10 @@ def trace_section(
         success=status is TraceStatus.SUCCESS, status=status, message=msg, phases=phases,
         residuals=residuals, **base,
     )
-    return _with_metrics(trace, singular)
+    return _with_metrics(trace, singular, options)
 
 
-def _with_metrics(trace: SectionTrace, singular: float) -> SectionTrace:
+def _with_metrics(trace: SectionTrace, singular: float, options: TraceOptions) -> SectionTrace:
     t = np.linspace(0.0, trace.duration, 4001)
     t = np.unique(np.concatenate([t, trace.breakpoints()]))
     v = trace.evaluate(t)
@@ -317,8 +373,16 @@ def _with_metrics(trace: SectionTrace, singular: float) -> SectionTrace:
         "min_singular_distance": float(singular),
         "min_speed_inside": float(np.min(np.abs(v["xi2"][1:-1]))) if t.size > 2 else 0.0,
     }
+    status, message = trace.status, trace.message
+    reach = max(metrics["max_abs_a"], metrics["max_abs_b"])
+    limit = options.excursion_limit * max(trace.params.length_scale, trace.length)
+    interior = v["xi2"][1:-1] * trace.direction
+    if trace.success and (reach > limit or np.any(interior <= 0.0)):
+        status = TraceStatus.EXCURSION
+        message = (f"mass reaches {reach:.3g} from the contact point (limit {limit:.3g})" if reach > limit
+                   else "the blade comes to rest inside the section")
     return SectionTrace(
-        success=trace.success, status=trace.status, message=trace.message, curve_index=trace.curve_index,
+        success=status is TraceStatus.SUCCESS, status=status, message=message, curve_index=trace.curve_index,
         section=trace.section, params=trace.params, speed=trace.speed, glide=trace.glide,
         phases=trace.phases, residuals=trace.residuals, metrics=metrics, nfev=trace.nfev,
     )
