@@ -97,6 +97,17 @@ def test_singular_set_is_detected():
     assert tr.sections[0].message
 
 
+def test_reported_singular_distance_matches_the_controls():
+    k = 1 / 0.8
+    tr = trace_figure(_single(Segment(k, 1.0)), P, TraceOptions(glide_lateral=-0.5))
+    sec = tr.sections[0]
+    assert sec.success
+    v = sec.evaluate(np.linspace(0, sec.duration, 4001))
+    independent = np.min(np.hypot(v["a"], v["b"] + k * P.I / P.M))
+    assert sec.metrics["min_singular_distance"] == pytest.approx(independent, rel=1e-3)
+    assert independent <= 1.375 + 1e-12  # never farther than the glide position
+
+
 def test_failed_section_does_not_lose_the_others():
     opts = TraceOptions(glide_lateral=-P.I / P.M)  # singular for curvature 1, harmless on the line
     fig = Figure("mix", (Curve((Segment(0.0, 1.0), Segment(1.0, 2.0)), (Join("cusp"),), name="mix"),))

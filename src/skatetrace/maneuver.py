@@ -158,6 +158,8 @@ def _rhs_factory(params: SleighParams, kappa: float, ufun):
         c_b = m * a * (kappa * m * b - Mm)
         c_0 = (Mm - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
         n2 = c_a * c_a + c_b * c_b
+        if not n2 > 0.0:  # exactly at the singular point (or NaN): no rate holds the curvature
+            raise _TooStiff
         n = math.sqrt(n2)
         ad = -u * c_b / n - c_0 * c_a / n2
         bd = u * c_a / n - c_0 * c_b / n2
@@ -292,6 +294,13 @@ def solve_stop(
         legs_spec.append((float(k), acc if i + 1 < len(legs) else math.inf))
     kind = "launch" if backward else "stop"
     a0, b0 = glide_ab
+    sa, sb = 0.0, -kappa * params.I / params.M
+    if math.hypot(a0 - sa, b0 - sb) <= singular_limit * params.length_scale:
+        return ManeuverSolution(
+            kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=0,
+            message=(f"the glide's mass position ({a0:.6g}, {b0:.6g}) is at the singular point "
+                     f"(0, -kappa I / M) = ({sa:.6g}, {sb:.6g}) of curvature {kappa:.6g}"),
+        )
     p = glide_state(params, kappa, a0, b0, speed)
     y0 = np.array([p[0], p[1], a0, b0, 0.0])
     sign = -1.0 if backward else 1.0
