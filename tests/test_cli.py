@@ -53,16 +53,32 @@ def test_bad_inputs_exit_2(tmp_path, capsys):
     assert main(["nonsense"]) == 2
 
 
-def test_failed_figure_exits_1_and_still_writes(tmp_path):
-    fig = {"curves": [{"pieces": [{"type": "line", "length": 1.0},
-                                  {"type": "arc", "curvature": 1.0, "length": 2.0}]}]}
-    path = tmp_path / "f.json"
-    path.write_text(json.dumps(fig))
+def test_failed_verification_exits_1_and_still_writes_everything(tmp_path, capsys):
+    """A tolerance no integrator can meet fails verification: exit 1, but nothing is lost."""
     out = tmp_path / "out"
-    # a gliding lateral offset at the singular point is not reachable from the CLI, so use m huge
-    # relative to the rest to keep the figure solvable; here we only check a success run writes
-    assert main(["trace", str(path), "--out", str(out), "--no-plots"]) == 0
-    assert (out / "controls.csv").exists()
+    assert main(["trace", "circle", "--out", str(out), "--tol", "1e-16", "--no-plots"]) == 1
+    report = json.loads((out / "report.json").read_text())
+    assert not report["success"] and "exceeds" in report["message"]
+    assert (out / "controls.csv").exists() and (out / "result.json").exists()
+    assert "verification: failed" in capsys.readouterr().out
+
+
+def test_result_json_round_trips_the_figure(tmp_path):
+    from skatetrace import pattern
+    from skatetrace.io import load_result
+
+    out = tmp_path / "out"
+    assert main(["trace", "s-bend", "--out", str(out), "--no-plots"]) == 0
+    data = load_result(out / "result.json")
+    original = pattern("s-bend")
+    assert [c.pieces for c in data["figure"].curves] == [c.pieces for c in original.curves]
+    sec = data["sections"][0]
+    assert len(sec["pieces"]) == 3
+    # the second piece starts where the first ends, at the state the solver reports there
+    first, second = sec["pieces"][0], sec["pieces"][1]
+    assert second["start_time"] > first["start_time"]
+    assert second["initial_state"]["xi2"] > 0
+    assert abs(second["initial_state"]["xi1"] - second["curvature"] * second["initial_state"]["xi2"]) < 1e-8
 
 
 def test_console_script_runs():

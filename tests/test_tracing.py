@@ -154,3 +154,19 @@ def test_implausible_solutions_are_refused():
     else:
         assert sec.status.name in {"EXCURSION", "NO_STOP", "NO_LAUNCH", "SINGULAR", "RESIDUAL"}
         assert sec.message
+
+
+def test_one_sided_limits_at_a_smooth_join():
+    """At a smooth join the state is continuous and the curvature held jumps from one side to the other."""
+    tr = trace_figure(pattern("s-bend"), P)
+    sec = tr.sections[0]
+    k0, k1 = (p.segment.curvature for p in sec.section.pieces[:2])
+    tj = sec.time_at_length(sec.section.pieces[0].segment.length)
+    left, right = sec.evaluate([tj], side="left"), sec.evaluate([tj], side="right")
+    for key in ("p1", "p2", "a", "b", "x", "y", "theta"):
+        assert left[key][0] == pytest.approx(right[key][0], abs=1e-9)
+    assert left["xi1"][0] == pytest.approx(k0 * left["xi2"][0], abs=1e-9)
+    assert right["xi1"][0] == pytest.approx(k1 * right["xi2"][0], abs=1e-9)
+    assert abs(right["adot"][0] - left["adot"][0]) + abs(right["bdot"][0] - left["bdot"][0]) > 1e-3
+    with pytest.raises(ValueError, match="side"):
+        sec.evaluate([tj], side="middle")

@@ -79,6 +79,10 @@ def _trace(args) -> int:
         print(f"{i:>7} {pcs:>14} {s.length:>9.4f} {s.duration:>9.4f} {res:>13.2e} {'ok' if s.success else 'FAILED':>8}")
         if not s.success:
             print(f"        reason: {s.message}")
+    for c in figure.curves:
+        cl = c.closure()
+        print(f"curve {c.name}: {'closed' if cl['closed'] else 'open'} (end-to-start gap {cl['position_gap']:.2e}, "
+              f"heading gap {cl['heading_gap']:.2e} rad)")
     print(f"max deviation {report.max_deviation:.3e} (tolerance {report.tolerance:.3e}, figure size {report.figure_size:.4g}); "
           f"max cusp speed {report.max_cusp_speed:.3e}")
     print(f"verification: {report.status} ({report.message}); wrote {out}/ in {elapsed:.1f} s")

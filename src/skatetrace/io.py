@@ -21,7 +21,8 @@ from .controls import ControlSchedule
 from .tracing import FigureTrace
 from .verify import VerificationReport
 
-__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "atomic_write", "result_dict", "write_results", "read_controls"]
+__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "atomic_write", "result_dict", "write_results", "load_result",
+           "read_controls"]
 
 SCHEMA_VERSION = "skatetrace.result/1"
 CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2")
@@ -59,18 +60,39 @@ def _clean(obj: Any) -> Any:
     return obj
 
 
-def result_dict(trace: FigureTrace, states: dict[str, np.ndarray] | None = None) -> dict[str, Any]:
-    """Everything needed to understand and reproduce a traced figure, as plain data."""
+_STATE_KEYS = ("p1", "p2", "theta", "x", "y", "a", "b", "adot", "bdot", "xi1", "xi2")
+
+
+def result_dict(trace: FigureTrace) -> dict[str, Any]:
+    """Everything needed to understand and reproduce a traced figure, as plain data.
+
+    Per section: its pieces, each with the time it starts and the state there; the phases with
+    their controls; the join (cusp, pivot) before it; residuals, metrics and status.
+    """
     sections = []
     for sec, t0 in zip(trace.sections, trace.start_times):
         d = sec.to_dict()
         d["start_time"] = t0
-        if sec.phases:
-            v = sec.evaluate(np.array([0.0]))
-            d["initial_state"] = {k: float(v[k][0]) for k in ("p1", "p2", "theta", "x", "y", "a", "b", "adot", "bdot")}
+        pieces = []
+        s_start = 0.0
+        for p in sec.section.pieces:
+            entry: dict[str, Any] = {"index": p.index, "curvature": p.segment.curvature, "length": p.segment.length,
+                                     "direction": p.direction}
+            if sec.phases:
+                tp = 0.0 if s_start == 0.0 else sec.time_at_length(s_start)
+                v = sec.evaluate(np.array([tp]))
+                entry["start_time"] = t0 + tp
+                entry["initial_state"] = {k: float(v[k][0]) for k in _STATE_KEYS}
+            pieces.append(entry)
+            s_start += p.segment.length
+        d["pieces"] = pieces
         join = sec.section.pieces[0].join_before
         d["join_before"] = join.to_dict() if join is not None else None
         sections.append(d)
+    curves = []
+    for c in trace.figure.curves:
+        centre = c.unit_centre() if c.repeat > 1 or c.closing is not None else None
+        curves.append({"name": c.name, "closure": c.closure(), "repeat_centre": centre})
     return _clean({
         "schema": SCHEMA_VERSION,
         "success": trace.success, "status": trace.status, "message": trace.message,
@@ -78,6 +100,7 @@ def result_dict(trace: FigureTrace, states: dict[str, np.ndarray] | None = None)
         "options": {"speed": trace.options.speed, "maneuver_length": trace.options.maneuver_length,
                     "glide_lateral": trace.options.glide_lateral, "residual_tol": trace.options.residual_tol},
         "figure": trace.figure.to_dict(),
+        "curves": curves,
         "duration": trace.duration,
         "sections": sections,
     })
@@ -99,14 +122,27 @@ def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule
     """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``."""
     out = Path(out)
     written = []
-    atomic_write(out / "result.json", json.dumps(result_dict(trace), indent=2))
+    atomic_write(out / "result.json", json.dumps(result_dict(trace), indent=2, allow_nan=False))
     written.append(out / "result.json")
     atomic_write(out / "controls.csv", _csv_text(schedule, states))
     written.append(out / "controls.csv")
     if report is not None:
-        atomic_write(out / "report.json", json.dumps(_clean({"schema": "skatetrace.report/1", **report.to_dict()}), indent=2))
+        atomic_write(out / "report.json", json.dumps(_clean({"schema": "skatetrace.report/1", **report.to_dict()}),
+                                                     indent=2, allow_nan=False))
         written.append(out / "report.json")
     return written
+
+
+def load_result(path: str | Path) -> dict[str, Any]:
+    """Read ``result.json``; its ``"figure"`` entry is returned as a :class:`~skatetrace.Figure`."""
+    from .figure import figure_from_dict
+
+    path = Path(path)
+    data = json.loads(path.read_text(encoding="utf-8"))
+    if data.get("schema") != SCHEMA_VERSION:
+        raise ValueError(f"{path}: expected schema {SCHEMA_VERSION!r}, got {data.get('schema')!r}")
+    data["figure"] = figure_from_dict(data["figure"])
+    return data
 
 
 def read_controls(path: str | Path) -> dict[str, np.ndarray]:

@@ -35,7 +35,9 @@ def plot_figure(trace: FigureTrace, report: VerificationReport, ax=None):
     for si in np.unique(rep.section):
         m = rep.section == si
         artists += ax.plot(rep.state[3, m], rep.state[4, m], "-", color="C0", lw=0.9)
-    cusps = [(p.start.x, p.start.y) for c in trace.figure.curves for p in c.layout() if p.join_before is not None and p.join_before.is_cusp]
+    # every section starts at rest: the first piece of a curve and every piece after a cusp
+    cusps = [(p.start.x, p.start.y) for c in trace.figure.curves for p in c.layout()
+             if p.join_before is None or p.join_before.is_cusp]
     if cusps:
         artists.append(ax.plot(*np.array(cusps).T, "o", color="C3", ms=3)[0])
     ax.set_aspect("equal")

@@ -150,20 +150,28 @@ class SectionTrace:
             return t_local - ph.maneuver.duration  # duration < 0: t in [tau, 0] -> [0, -tau]
         return ph.t0 + t_local
 
-    def evaluate(self, t) -> dict[str, np.ndarray]:
+    def evaluate(self, t, side: str = "right") -> dict[str, np.ndarray]:
         """State and controls at physical section times ``t`` (1-D array).
 
         Returns a dict of arrays: ``p1, p2, theta, x, y, a, b, adot, bdot, s, xi1, xi2`` and
-        ``segment`` (index of the piece within the section). At a breakpoint the value from the
-        phase or leg that *starts* there is returned, except at the very end.
+        ``segment`` (index of the piece within the section). At a breakpoint, where the control
+        rates jump, ``side="right"`` gives the limit from after it (the phase or leg that starts
+        there) and ``side="left"`` the limit from before it.
         """
+        if side not in ("left", "right"):
+            raise ValueError(f"side must be 'left' or 'right', got {side!r}")
+        right = side == "right"
         V = self.speed
         tn = np.atleast_1d(np.asarray(t, dtype=float)) * V
         n = tn.size
         out = {k: np.empty(n) for k in ("p1", "p2", "a", "b", "adot", "bdot", "s")}
+        end = self.phases[-1].t1 if self.phases else 0.0
         for i, ph in enumerate(self.phases):
-            last = i == len(self.phases) - 1
-            sel = (tn >= ph.t0) & ((tn < ph.t1) | (last & (tn <= ph.t1 + 1e-12)))
+            first, last = i == 0, i == len(self.phases) - 1
+            if right:
+                sel = (tn >= ph.t0) & ((tn < ph.t1) | (last & (tn <= end * (1 + 1e-14))))
+            else:
+                sel = ((tn > ph.t0) | (first & (tn >= 0.0))) & (tn <= ph.t1)
             if not np.any(sel):
                 continue
             if ph.kind == "glide":
@@ -178,16 +186,20 @@ class SectionTrace:
             tl = tn[sel] + man.duration if ph.kind == "launch" else tn[sel] - ph.t0
             tl = np.clip(tl, min(0.0, man.duration), max(0.0, man.duration))
             vals = {k: np.empty(tl.size) for k in out}
-            # At a shared boundary the leg that starts there (in section time) must win, so it is
-            # written last: forwards that is the later leg, backwards (a launch) the earlier one.
+            # At a shared boundary the leg on the requested side must win, so it is written last.
+            # In section time the legs run in list order forwards and reversed for a launch.
             legs = man.legs if ph.kind != "launch" else man.legs[::-1]
+            if not right:
+                legs = legs[::-1]
+            eps = 1e-12 * max(1.0, abs(man.duration))  # section time -> local time loses a few ulps
             for leg in legs:
                 lo, hi = min(leg.t0, leg.t1), max(leg.t0, leg.t1)
-                m = (tl >= lo) & (tl <= hi)
+                m = (tl >= lo - eps) & (tl <= hi + eps)
                 if not np.any(m):
                     continue
-                y = leg.sol(tl[m])
-                ad, bd, _ = constrained_rates(self.params, leg.kappa, y[0], y[1], y[2], y[3], man.control(tl[m]))
+                y = leg.sol(np.clip(tl[m], lo, hi))
+                ad, bd, _ = constrained_rates(self.params, leg.kappa, y[0], y[1], y[2], y[3],
+                                              man.control(np.clip(tl[m], lo, hi)))
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
                     vals[key][m] = val
             vals["s"] = ph.s0 + (vals["s"] - (man.end[4] if ph.kind == "launch" else 0.0))
@@ -219,6 +231,23 @@ class SectionTrace:
         xi1, xi2, _ = velocities(self.params, out["p1"], out["p2"], out["a"], out["b"], out["adot"], out["bdot"])
         out["xi1"], out["xi2"] = xi1, xi2
         return out
+
+    def time_at_length(self, s: float) -> float:
+        """Physical section time at which the blade has travelled ``s`` (bisection; speed > 0 inside).
+
+        A time within 1e-9 of a breakpoint (a join) is snapped onto it, so that evaluating there
+        gives the state at the start of the next piece.
+        """
+        lo, hi = 0.0, self.duration
+        for _ in range(100):
+            mid = 0.5 * (lo + hi)
+            if self.evaluate(np.array([mid]))["s"][0] < s:
+                lo = mid
+            else:
+                hi = mid
+        bps = self.breakpoints()
+        near = bps[np.argmin(np.abs(bps - hi))]
+        return float(near) if abs(near - hi) <= 1e-9 * max(1.0, self.duration) else hi
 
     def to_dict(self) -> dict[str, Any]:
         phases = []

@@ -43,25 +43,24 @@ def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, 
             continue
         bps = sec.breakpoints()
         for lo, hi in zip(bps[:-1], bps[1:]):
-            # Evaluate strictly inside the interval so that both one-sided limits are sampled.
-            eps = 1e-13 * max(1.0, hi)
-
-            def fn(tt, _lo=lo, _hi=hi, _e=eps):
-                v = sec.evaluate(np.clip(tt, _lo + _e, _hi - _e) if _hi - _lo > 4 * _e else tt)
+            # Both one-sided limits are sampled at every breakpoint: the interval's last row is the
+            # limit from the left, the next interval's first row the limit from the right.
+            def fn(tt, _hi=hi):
+                left = tt >= _hi
+                v = sec.evaluate(tt)
+                if np.any(left):
+                    vl = sec.evaluate(tt[left], side="left")
+                    for k in v:
+                        v[k][left] = vl[k]
                 return v["a"], v["b"], v["adot"], v["bdot"]
 
             ts = sample_adaptively(fn, lo, hi)
-            inner = np.clip(ts, lo + eps, hi - eps)
-            v = sec.evaluate(inner)
-            # exact end values where the section starts and stops (rest): take the true boundary
-            v_end = sec.evaluate(np.array([lo, hi]))
+            v = sec.evaluate(ts)
+            vl = sec.evaluate(ts[-1:], side="left")
+            for k in v:
+                v[k][-1] = vl[k][0]
             for k in ("a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2"):
-                col = v[k].copy()
-                if lo == 0.0:
-                    col[0] = v_end[k][0]
-                if hi == bps[-1]:
-                    col[-1] = v_end[k][-1]
-                cols[k].append(col)
+                cols[k].append(v[k])
             cols["t"].append(t_start + ts)
             cols["section"].append(np.full(ts.size, si))
             cols["piece"].append(np.array([sec.section.pieces[i].index for i in v["segment"]]))

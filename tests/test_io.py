@@ -1,0 +1,27 @@
+import os
+
+import pytest
+
+from skatetrace.io import atomic_write
+
+
+def test_atomic_write_replaces_whole_file(tmp_path):
+    p = tmp_path / "a.json"
+    atomic_write(p, "old")
+    atomic_write(p, "new")
+    assert p.read_text() == "new"
+    assert os.listdir(tmp_path) == ["a.json"]
+
+
+def test_interrupted_write_keeps_the_old_file_and_no_temporary(tmp_path, monkeypatch):
+    p = tmp_path / "a.json"
+    atomic_write(p, "old")
+
+    def boom(src, dst):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "replace", boom)
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(p, "new")
+    assert p.read_text() == "old"
+    assert os.listdir(tmp_path) == ["a.json"]
