@@ -84,3 +84,14 @@ def test_result_json_round_trips_the_figure(tmp_path):
 def test_console_script_runs():
     proc = subprocess.run([sys.executable, "-m", "skatetrace.cli", "figures"], capture_output=True, text=True)
     assert proc.returncode == 0 and "circle" in proc.stdout
+
+
+def test_example_figure_traces_end_to_end(tmp_path):
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "flower-with-stems.json"
+    out = tmp_path / "out"
+    assert main(["trace", str(example), "--out", str(out), "--no-plots"]) == 0
+    result = json.loads((out / "result.json").read_text())
+    assert result["curves"][0]["closure"]["closed"]
+    assert len(result["sections"]) == 8 and all(s["success"] for s in result["sections"])

@@ -32,7 +32,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
-from .model import SleighParams
+from .model import SleighParams, curvature_coefficients, velocities
 
 __all__ = ["Leg", "ManeuverSolution", "glide_state", "constrained_rates", "solve_stop"]
 
@@ -108,30 +108,12 @@ def constrained_rates(params: SleighParams, kappa, p1, p2, a, b, u):
 
     Vectorised. Returns ``(adot, bdot, |c|)``; ``|c| = 0`` is the singular point.
     """
-    M, m, I = params.M, params.m, params.I
-    c_a = m * (M * b + kappa * (I + m * a * a))
-    c_b = m * a * (kappa * m * b - (M + m))
-    c_0 = (M + m - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
+    c_a, c_b, c_0 = curvature_coefficients(params, kappa, p1, p2, a, b)
     n2 = c_a * c_a + c_b * c_b
     n = np.sqrt(n2)
     adot = -u * c_b / n - c_0 * c_a / n2
     bdot = u * c_a / n - c_0 * c_b / n2
     return adot, bdot, n
-
-
-def _c0_over_norm(params, kappa, p1, p2, a, b):
-    """Signed size of the mass velocity that the curvature condition forces when ``u = 0``."""
-    M, m, I = params.M, params.m, params.I
-    c_a = m * (M * b + kappa * (I + m * a * a))
-    c_b = m * a * (kappa * m * b - (M + m))
-    c_0 = (M + m - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
-    return c_0 / math.hypot(c_a, c_b)
-
-
-def _speed(params: SleighParams, p1, p2, a, b, adot, bdot):
-    M, m, I = params.M, params.m, params.I
-    D = (M + m) * (I + m * a * a) + M * m * b * b
-    return (m * (b * (p1 - m * a * bdot) - (I + m * a * a) * adot) + (I + m * (a * a + b * b)) * p2) / D
 
 
 class _TooStiff(Exception):
@@ -147,6 +129,9 @@ def _rhs_factory(params: SleighParams, kappa: float, ufun):
     Mm = M + m
     calls = [0]
 
+    # The model's formulas inlined with scalar math: this runs thousands of times per solve, and
+    # numpy's per-call overhead would dominate. Tests compare it with model.rhs and
+    # constrained_rates.
     def f(t, y):
         calls[0] += 1
         if calls[0] > _MAX_EVALUATIONS:
@@ -245,7 +230,7 @@ def _stop_event(params):
 def _end_speed(params, kappa, y, u):
     p1, p2, a, b, _ = y
     ad, bd, _n = constrained_rates(params, kappa, p1, p2, a, b, u)
-    return _speed(params, p1, p2, a, b, ad, bd)
+    return velocities(params, p1, p2, a, b, ad, bd)[1]
 
 
 def _min_singular_distance(params, legs, n=400):

@@ -47,6 +47,12 @@ def plot_figure(trace: FigureTrace, report: VerificationReport, ax=None):
     return artists
 
 
+def _time_axes(ax, ylabel: str) -> None:
+    ax.set_xlabel("t")
+    ax.set_ylabel(ylabel)
+    ax.legend()
+
+
 def _switches(ax, trace: FigureTrace):
     return [ax.axvline(t, color="C3", lw=0.5, alpha=0.5) for t in trace.start_times[1:]]
 
@@ -57,9 +63,7 @@ def plot_controls(trace: FigureTrace, report: VerificationReport, ax=None):
     rep = report.replay
     artists = ax.plot(rep.t, rep.controls[0], label="a(t)") + ax.plot(rep.t, rep.controls[1], label="b(t)")
     artists += _switches(ax, trace)
-    ax.set_xlabel("t")
-    ax.set_ylabel("mass position (body frame)")
-    ax.legend()
+    _time_axes(ax, "mass position (body frame)")
     return artists
 
 
@@ -71,9 +75,7 @@ def plot_speed(trace: FigureTrace, report: VerificationReport, ax=None):
     artists = ax.plot(rep.t, xi2, label="xi2 (speed)")
     starts = np.array(trace.start_times + (trace.duration,))
     artists.append(ax.plot(starts, np.zeros_like(starts), "o", color="C3", ms=3, label="cusps")[0])
-    ax.set_xlabel("t")
-    ax.set_ylabel("xi2")
-    ax.legend()
+    _time_axes(ax, "xi2")
     return artists
 
 
@@ -101,9 +103,7 @@ def plot_energies(trace: FigureTrace, report: VerificationReport, ax=None):
     ks = skate_energy(trace.params, xi1, xi2)
     km = mass_energy(trace.params, xi1, xi2, *rep.controls)
     artists = ax.plot(rep.t, ks, label="skate") + ax.plot(rep.t, km, label="mass")
-    ax.set_xlabel("t")
-    ax.set_ylabel("kinetic energy")
-    ax.legend()
+    _time_axes(ax, "kinetic energy")
     return artists
 
 
