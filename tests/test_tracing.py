@@ -170,3 +170,15 @@ def test_one_sided_limits_at_a_smooth_join():
     assert abs(right["adot"][0] - left["adot"][0]) + abs(right["bdot"][0] - left["bdot"][0]) > 1e-3
     with pytest.raises(ValueError, match="side"):
         sec.evaluate([tj], side="middle")
+
+
+def test_sections_after_a_failed_one_are_still_verified():
+    opts = TraceOptions(glide_lateral=-P.I / P.M)  # the arc glides at its singular point: refused
+    fig = Figure("mix2", (Curve((Segment(1.0, 2.0), Segment(0.0, 1.0)), (Join("cusp", 0.5),), name="mix2"),))
+    tr = trace_figure(fig, P, opts)
+    assert not tr.sections[0].success and tr.sections[1].success
+    assert not tr.sections[0].phases  # failed controls are not handed on
+    rep = verify(tr)
+    assert not rep.success and not rep.sections[0]["traced"]
+    assert rep.sections[1]["max_deviation_replay_to_figure"] < 1e-8
+    assert rep.sections[1]["max_deviation_figure_to_replay"] < 1e-8

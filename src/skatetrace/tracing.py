@@ -346,8 +346,8 @@ def trace_section(
         message=first_failure.message + f" (tried {attempts} glide placements: every segment as the glide, "
         "every candidate mass position)",
         curve_index=curve_index, section=section, params=params, speed=options.speed, glide=first_failure.glide,
-        phases=first_failure.phases, residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=nfev,
-    )
+        residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=nfev,
+    )  # no phases: controls that failed a check are not handed on to be written or replayed
 
 
 def _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev) -> SectionTrace:
@@ -444,7 +444,10 @@ class FigureTrace:
 
     @property
     def duration(self) -> float:
-        return self.start_times[-1] + self.sections[-1].duration if self.sections else 0.0
+        if not self.sections:
+            return 0.0
+        last = self.sections[-1]
+        return self.start_times[-1] + (last.duration if last.phases else 0.0)
 
 
 def _section_key(params: SleighParams, section: Section, options: TraceOptions) -> tuple:

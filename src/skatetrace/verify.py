@@ -101,7 +101,9 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
         a, b, ad, bd = (float(v) for v in f(t0))
         if si != prev_section:
             first = sec.section.pieces[0]
-            if y is None or first.join_before is None:
+            # Start from the figure's own layout at a curve's start or after a section that could
+            # not be traced (its motion is missing); otherwise carry on from the replay itself.
+            if y is None or first.join_before is None or prev_section != si - 1:
                 theta = first.start.heading + (math.pi if first.direction < 0 else 0.0)
                 x0, y0 = first.start.x, first.start.y
             else:
