@@ -7,8 +7,6 @@ import pytest
 
 from skatetrace import Curve, Figure, Join, Segment, SleighParams, TraceOptions, trace_figure, verify
 from skatetrace.patterns import pattern
-from skatetrace.tracing import trace_section
-from skatetrace.verify import schedule_from_trace
 
 P = SleighParams()
 
@@ -119,8 +117,9 @@ def test_failed_section_does_not_lose_the_others():
 
 
 @pytest.mark.slow
-def test_double_flower_end_to_end():
-    fig = pattern("double-flower")
+@pytest.mark.parametrize("name", ["double-flower", "double-flower-cusps"])
+def test_double_flower_end_to_end(name):
+    fig = pattern(name)
     tr = trace_figure(fig)
     assert tr.success
     assert max(max(s.residuals.values()) for s in tr.sections) <= 1e-10

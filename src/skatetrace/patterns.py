@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 
 from .errors import FigureFormatError
 from .figure import SMOOTH, Curve, Figure, Join
-from .geometry import Pose, Segment
+from .geometry import Segment
 from .model import SleighParams
 
 __all__ = ["pattern", "pattern_names"]

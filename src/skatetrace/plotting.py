@@ -109,11 +109,13 @@ def plot_energies(trace: FigureTrace, report: VerificationReport, ax=None):
 
 def save_all(trace: FigureTrace, report: VerificationReport, out) -> list:
     """Write figure.png, controls.png, speed.png, mass_path.png and energies.png into ``out``."""
+    import io
+    from pathlib import Path
+
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
-    from pathlib import Path
 
     from .io import atomic_write
 
@@ -125,9 +127,7 @@ def save_all(trace: FigureTrace, report: VerificationReport, out) -> list:
         fig, ax = plt.subplots(figsize=size)
         fn(trace, report, ax=ax)
         fig.tight_layout()
-        import io as _io
-
-        buf = _io.BytesIO()
+        buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=110)
         plt.close(fig)
         atomic_write(out / f"{name}.png", buf.getvalue())

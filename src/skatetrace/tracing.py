@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from .figure import Curve, Figure, Section
-from .geometry import Pose, advance
+from .figure import Figure, Section
+from .geometry import advance
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, solve_stop
 from .model import SleighParams, mass_energy, velocities
 

@@ -23,8 +23,8 @@ from scipy.integrate import solve_ivp
 from scipy.spatial import cKDTree
 
 from .controls import ControlSchedule, sample_adaptively
-from .geometry import distance_to_segment
-from .model import SleighParams, momenta, rhs, velocities
+from .geometry import distance_to_segment, segment_points
+from .model import SleighParams, momenta, velocities
 from .tracing import FigureTrace
 
 __all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
@@ -80,7 +80,6 @@ class Replay:
     controls: np.ndarray  # (4, n): a, b, adot, bdot
     section: np.ndarray
     piece: np.ndarray
-    solutions: tuple = field(default=(), repr=False)  # (t0, t1, OdeSolution, interpolant, section)
 
     def velocities(self, params: SleighParams):
         return velocities(params, self.state[0], self.state[1], *self.controls)
@@ -90,7 +89,7 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
            points_per_unit: float = 400.0) -> Replay:
     """Integrate the full dynamics under ``schedule``, applying the figure's cusps."""
     params = trace.params
-    ts, states, ctrls, secs, pieces, sols = [], [], [], [], [], []
+    ts, states, ctrls, secs, pieces = [], [], [], [], []
     y = None
     prev_section = None
     for i0, i1 in schedule.chunks():
@@ -122,7 +121,6 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
             return [-m_ * eta_ * xi2_, m_ * eta_ * xi1_, xi1_, xi2_ * math.cos(yy[2]), xi2_ * math.sin(yy[2])]
 
         sol = solve_ivp(f_rhs, (t0, t1), y, method="DOP853", rtol=rtol, atol=atol, dense_output=True)
-        length = float(np.sum(np.abs(np.diff(schedule.t[i0:i1]))))  # time span; dense sampling below
         n = max(50, int(math.ceil((t1 - t0) * points_per_unit)))
         tt = np.linspace(t0, t1, n)
         ys = sol.sol(tt)
@@ -132,11 +130,9 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
         secs.append(np.full(n, si))
         idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
         pieces.append(schedule.piece[i0:i1][idx])
-        sols.append((t0, t1, sol.sol, f, si))
         y = sol.y[:, -1]
-        del length
     return Replay(t=np.concatenate(ts), state=np.hstack(states), controls=np.hstack(ctrls),
-                  section=np.concatenate(secs), piece=np.concatenate(pieces), solutions=tuple(sols))
+                  section=np.concatenate(secs), piece=np.concatenate(pieces))
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -239,8 +235,6 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         for p in sec.section.pieces:
             d_to = np.minimum(d_to, distance_to_segment(pts, p.start, p.segment))
             n = max(64, int(p.segment.length * 200))
-            from .geometry import segment_points
-
             targets.append(segment_points(p.start, p.segment, n))
         target = np.hstack(targets)
         d_from = _figure_to_replay(target, rep, m, params)
