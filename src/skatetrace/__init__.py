@@ -8,6 +8,7 @@ from .figure import Curve, Figure, Join, figure_from_dict, load_figure
 from .geometry import Pose, Segment
 from .model import SleighParams
 from .patterns import pattern, pattern_names
+from .simulate import Trajectory, simulate
 from .tracing import FigureTrace, SectionTrace, TraceOptions, TraceStatus, trace_figure, trace_section
 from .verify import VerificationReport, schedule_from_trace, verify
 
@@ -15,6 +16,6 @@ __all__ = [
     "Curve", "Figure", "FigureFormatError", "FigureTrace", "InfeasibleArcError", "Join", "Pose",
     "SectionTrace", "Segment", "SkatetraceError", "SleighParams", "TraceOptions", "TraceStatus",
     "VerificationReport", "figure_from_dict", "load_figure", "pattern", "pattern_names",
-    "schedule_from_trace", "trace_figure", "trace_section", "verify",
+    "Trajectory", "schedule_from_trace", "simulate", "trace_figure", "trace_section", "verify",
 ]
 __version__ = "0.1.0"

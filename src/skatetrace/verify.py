@@ -19,12 +19,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.spatial import cKDTree
 
 from .controls import ControlSchedule, sample_adaptively
 from .geometry import distance_to_segment, segment_points
 from .model import SleighParams, momenta, velocities
+from .simulate import simulate
 from .tracing import FigureTrace
 
 __all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
@@ -112,25 +112,17 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
             y = np.array([p1, p2, theta, x0, y0])
             prev_section = si
 
-        f_scalar = schedule.scalar_interpolant(i0, i1)
-        m_ = params.m
-
-        def f_rhs(t, yy, _f=f_scalar):
-            aa, bb, aad, bbd = _f(t)
-            xi1_, xi2_, eta_ = velocities(params, yy[0], yy[1], aa, bb, aad, bbd)
-            return [-m_ * eta_ * xi2_, m_ * eta_ * xi1_, xi1_, xi2_ * math.cos(yy[2]), xi2_ * math.sin(yy[2])]
-
-        sol = solve_ivp(f_rhs, (t0, t1), y, method="DOP853", rtol=rtol, atol=atol, dense_output=True)
+        traj = simulate(params, y, schedule.scalar_interpolant(i0, i1), (t0, t1), rtol=rtol, atol=atol)
         n = max(50, int(math.ceil((t1 - t0) * points_per_unit)))
         tt = np.linspace(t0, t1, n)
-        ys = sol.sol(tt)
+        ys = traj(tt)  # NaN where a failed integration did not reach: verify reports it
         ts.append(tt)
         states.append(ys)
         ctrls.append(np.vstack(f(tt)))
         secs.append(np.full(n, si))
         idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
         pieces.append(schedule.piece[i0:i1][idx])
-        y = sol.y[:, -1]
+        y = traj.state[:, -1]
     return Replay(t=np.concatenate(ts), state=np.hstack(states), controls=np.hstack(ctrls),
                   section=np.concatenate(secs), piece=np.concatenate(pieces))
 
@@ -262,6 +254,8 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             drifts.append({"piece": p.index, "invariant": name, "drift": float(np.ptp(inv)),
                            "scale": float(np.max(np.abs(inv)) + 1e-300)})
     max_dev = max(dev_to, dev_from)
+    if not np.all(np.isfinite(rep.state)):
+        max_dev = math.inf  # the replay broke down somewhere: never let NaN pass a comparison
     max_cusp = max(cusp_speeds) if cusp_speeds else 0.0
     speed_scale = trace.options.speed
     problems = []
