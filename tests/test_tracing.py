@@ -167,6 +167,7 @@ def test_one_sided_limits_at_a_smooth_join():
     assert left["xi1"][0] == pytest.approx(k0 * left["xi2"][0], abs=1e-9)
     assert right["xi1"][0] == pytest.approx(k1 * right["xi2"][0], abs=1e-9)
     assert abs(right["adot"][0] - left["adot"][0]) + abs(right["bdot"][0] - left["bdot"][0]) > 1e-3
+    assert (left["segment"][0], right["segment"][0]) == (0, 1)
     with pytest.raises(ValueError, match="side"):
         sec.evaluate([tj], side="middle")
 
@@ -181,3 +182,12 @@ def test_sections_after_a_failed_one_are_still_verified():
     assert not rep.success and not rep.sections[0]["traced"]
     assert rep.sections[1]["max_deviation_replay_to_figure"] < 1e-8
     assert rep.sections[1]["max_deviation_figure_to_replay"] < 1e-8
+
+
+def test_evaluate_refuses_times_outside_the_section():
+    sec = trace_figure(_single(Segment(1.0, 1.0)), P).sections[0]
+    with pytest.raises(ValueError, match="span"):
+        sec.evaluate([sec.duration * 1.01])
+    with pytest.raises(ValueError, match="span"):
+        sec.evaluate([-1e-3])
+    assert sec.evaluate([sec.duration])["xi2"][0] == pytest.approx(0.0, abs=1e-12)

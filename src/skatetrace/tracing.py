@@ -160,12 +160,16 @@ class SectionTrace:
         """
         if side not in ("left", "right"):
             raise ValueError(f"side must be 'left' or 'right', got {side!r}")
+        if not self.phases:
+            raise ValueError(f"this section was not traced ({self.message}); there is nothing to evaluate")
         right = side == "right"
         V = self.speed
         tn = np.atleast_1d(np.asarray(t, dtype=float)) * V
+        end = self.phases[-1].t1
+        if not np.all((tn >= 0.0) & (tn <= end * (1 + 1e-14))):
+            raise ValueError(f"times must lie in the section's span [0, {self.duration:.6g}]")
         n = tn.size
         out = {k: np.empty(n) for k in ("p1", "p2", "a", "b", "adot", "bdot", "s")}
-        end = self.phases[-1].t1 if self.phases else 0.0
         for i, ph in enumerate(self.phases):
             first, last = i == 0, i == len(self.phases) - 1
             if right:
@@ -208,13 +212,14 @@ class SectionTrace:
         # physical scaling: momenta and rates scale with the speed
         for k in ("p1", "p2", "adot", "bdot"):
             out[k] *= V
-        return self._finish(out)
+        return self._finish(out, side)
 
-    def _finish(self, out: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    def _finish(self, out: dict[str, np.ndarray], side: str) -> dict[str, np.ndarray]:
         pieces = self.section.pieces
         ends = np.cumsum([p.segment.length for p in pieces])
         s = np.clip(out["s"], 0.0, ends[-1])
-        seg = np.minimum(np.searchsorted(ends, s, side="right"), len(pieces) - 1)
+        # at a join the left limit belongs to the piece that ends there, the right to the next
+        seg = np.minimum(np.searchsorted(ends, s, side=side), len(pieces) - 1)
         x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
         starts = np.concatenate([[0.0], ends[:-1]])
         for i, p in enumerate(pieces):
