@@ -170,6 +170,10 @@ class SectionTrace:
             raise ValueError(f"times must lie in the section's span [0, {self.duration:.6g}]")
         n = tn.size
         out = {k: np.empty(n) for k in ("p1", "p2", "a", "b", "adot", "bdot", "s")}
+        # Which piece each time belongs to follows from the phase and leg, not from s: at a join
+        # s is only known to the integration's accuracy.
+        g = self.glide["segment"]
+        seg = np.empty(n, dtype=int)
         for i, ph in enumerate(self.phases):
             first, last = i == 0, i == len(self.phases) - 1
             if right:
@@ -185,11 +189,15 @@ class SectionTrace:
                 out["a"][sel], out["b"][sel] = a, b
                 out["adot"][sel] = out["bdot"][sel] = 0.0
                 out["s"][sel] = ph.s0 + (tn[sel] - ph.t0)
+                seg[sel] = g
                 continue
             man = ph.maneuver
             tl = tn[sel] + man.duration if ph.kind == "launch" else tn[sel] - ph.t0
             tl = np.clip(tl, min(0.0, man.duration), max(0.0, man.duration))
             vals = {k: np.empty(tl.size) for k in out}
+            vseg = np.empty(tl.size, dtype=int)
+            step = -1 if ph.kind == "launch" else 1
+            index = {id(leg): g + step * j for j, leg in enumerate(man.legs)}
             # At a shared boundary the leg on the requested side must win, so it is written last.
             # In section time the legs run in list order forwards and reversed for a launch.
             legs = man.legs if ph.kind != "launch" else man.legs[::-1]
@@ -206,26 +214,27 @@ class SectionTrace:
                                               man.control(np.clip(tl[m], lo, hi)))
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
                     vals[key][m] = val
+                vseg[m] = index[id(leg)]
             vals["s"] = ph.s0 + (vals["s"] - (man.end[4] if ph.kind == "launch" else 0.0))
             for k in out:
                 out[k][sel] = vals[k]
+            seg[sel] = vseg
         # physical scaling: momenta and rates scale with the speed
         for k in ("p1", "p2", "adot", "bdot"):
             out[k] *= V
-        return self._finish(out, side)
+        return self._finish(out, seg)
 
-    def _finish(self, out: dict[str, np.ndarray], side: str) -> dict[str, np.ndarray]:
+    def _finish(self, out: dict[str, np.ndarray], seg: np.ndarray) -> dict[str, np.ndarray]:
         pieces = self.section.pieces
         ends = np.cumsum([p.segment.length for p in pieces])
         s = np.clip(out["s"], 0.0, ends[-1])
-        # at a join the left limit belongs to the piece that ends there, the right to the next
-        seg = np.minimum(np.searchsorted(ends, s, side=side), len(pieces) - 1)
         x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
         starts = np.concatenate([[0.0], ends[:-1]])
         for i, p in enumerate(pieces):
             m = seg == i
             if np.any(m):
-                xs, ys, hs = advance(p.start, p.segment.curvature, s[m] - starts[i])
+                local = np.clip(s[m] - starts[i], 0.0, p.segment.length)
+                xs, ys, hs = advance(p.start, p.segment.curvature, local)
                 x[m], y[m], heading[m] = xs, ys, hs
         d = self.direction
         if d < 0:
