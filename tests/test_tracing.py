@@ -191,3 +191,14 @@ def test_evaluate_refuses_times_outside_the_section():
     with pytest.raises(ValueError, match="span"):
         sec.evaluate([-1e-3])
     assert sec.evaluate([sec.duration])["xi2"][0] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("seg", [Segment(0.1, 0.349), Segment(0.0, 0.01)])
+def test_gentle_arcs_and_tiny_lines(seg):
+    """A gently curved short arc (a stop from a = 0 would need the mass ~2/k away) and a 1 cm line."""
+    tr = trace_figure(_single(seg), P)
+    assert tr.success, tr.message
+    sec = tr.sections[0]
+    assert max(sec.metrics["max_abs_a"], sec.metrics["max_abs_b"]) < 5.0
+    rep = verify(tr)
+    assert rep.success, rep.message

@@ -312,7 +312,8 @@ def solve_stop(
     # farther from the singular point.
     candidates = []
     for direction in (1.0, -1.0):
-        grid = direction * u_nat / t_nat * np.geomspace(0.05, 2000.0, 23)
+        # alpha scales like 1/length^2 on an arc and 1/length on a line: a wide grid covers both
+        grid = direction * u_nat / t_nat * np.geomspace(1e-3, 2e3, 29)
         lengths = [event_length(a) for a in grid]
         for (a1, (l1, t1)), (a2, (l2, t2)) in zip(zip(grid, lengths), zip(grid[1:], lengths[1:])):
             if l1 is None or l2 is None:

@@ -290,23 +290,28 @@ def _auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> 
     return min(0.5 * length, cap)
 
 
-def _glide_candidates(params: SleighParams, segs, g: int, ell: float, options: TraceOptions) -> list[tuple[float, float]]:
-    """Locked mass positions to try for the glide on segment ``g``, most natural first.
+def _glide_candidates(params: SleighParams, segs, g: int, ell: float,
+                      options: TraceOptions) -> list[tuple[tuple[float, float], bool]]:
+    """Mass positions ``((a, b), steady)`` to try at the apex on segment ``g``, most natural first.
 
-    At a smooth join from curvature k1 to k2 the control rates jump by ``D (k1 - k2) xi2 / |c|``
-    along ``c``; with the mass at ``(0, b)`` the jump moves the mass backwards (speeding the
-    sleigh up) iff ``b - b*`` has the sign of ``k1 - k2``, where ``b* = -k2 I / M`` is the singular
-    point of the new curvature. Gliding on that side lets a stop or launch carry through the join.
+    ``steady`` apexes are glides: the mass locked at ``(0, b)`` on an arc or anywhere on a line
+    keeps the sleigh on the curve at constant speed, so a long segment simply glides longer. At a
+    smooth join from curvature k1 to k2 the control rates jump by ``D (k1 - k2) xi2 / |c|`` along
+    ``c``; with the mass at ``(0, b)`` the jump moves the mass backwards (speeding the sleigh up)
+    iff ``b - b*`` has the sign of ``k1 - k2``, where ``b* = -k2 I / M`` is the singular point of
+    the new curvature, so those positions are tried next. Last, on a gently curved arc, where a
+    stop driven from ``a = 0`` needs lateral excursions of about ``2 / |k|``, the line's apex
+    ``(a, 0)`` is tried as an instant (not a glide): the launch runs straight into the stop.
     """
     kg = segs[g].curvature
     scale = params.length_scale
+    # On a line the mass is ahead of the blade: a launch over ell moves it back by about
+    # (M + m) ell / m, which must not reach a = 0 (the singular point of a line).
+    base = 2.0 * (params.M + params.m) / params.m * ell + scale
     if kg == 0.0:
-        # On a line the mass is ahead of the blade: a launch over ell moves it back by about
-        # (M + m) ell / m, which must not reach a = 0 (the singular point of a line).
-        base = 2.0 * (params.M + params.m) / params.m * ell + scale
-        return [(base, 0.0), (2.0 * base, 0.0), (4.0 * base, 0.0)]
+        return [((base, 0.0), True), ((2.0 * base, 0.0), True), ((4.0 * base, 0.0), True)]
     if options.glide_lateral is not None:
-        return [(0.0, options.glide_lateral)]
+        return [((0.0, options.glide_lateral), True)]
     out = [0.0]
     after = next((s.curvature for s in segs[g + 1:] if s.curvature != kg), None)
     before = next((s.curvature for s in reversed(segs[:g]) if s.curvature != kg), None)
@@ -320,7 +325,8 @@ def _glide_candidates(params: SleighParams, segs, g: int, ell: float, options: T
     for b in out:
         if all(abs(b - c) > 1e-12 for c in seen):
             seen.append(b)
-    return [(0.0, b) for b in seen]
+    instant = 2.0 * (params.M + params.m) / params.m * (0.5 * segs[g].length) + scale
+    return [((0.0, b), True) for b in seen] + [((instant, 0.0), False), ((2.0 * instant, 0.0), False)]
 
 
 def trace_section(
@@ -341,11 +347,13 @@ def trace_section(
         kg, Lg = segs[g]
         ell = options.maneuver_length or _auto_maneuver_length(params, kg, Lg)
         ell = min(ell, 0.5 * Lg)
-        before = [(kg, ell)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
-        after = [(kg, ell)] + [(s.curvature, s.length) for s in segs[g + 1:]]
-        for glide_ab in _glide_candidates(params, segs, g, ell, options):
-            glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell, "kappa": kg,
-                     "speed": options.speed}
+        for glide_ab, steady in _glide_candidates(params, segs, g, ell, options):
+            # an instant apex is no glide: the launch and the stop share the whole segment
+            ell_g = ell if steady else 0.5 * Lg
+            before = [(kg, ell_g)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
+            after = [(kg, ell_g)] + [(s.curvature, s.length) for s in segs[g + 1:]]
+            glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
+                     "kappa": kg, "speed": options.speed}
             with np.errstate(divide="ignore", invalid="ignore"):
                 stop = solve_stop(params, after, glide_ab, 1.0, **kw)
                 launch = solve_stop(params, before, glide_ab, 1.0, backward=True, **kw) if stop.success else None
