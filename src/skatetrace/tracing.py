@@ -290,6 +290,15 @@ def _auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> 
     return min(0.5 * length, cap)
 
 
+def _line_apex(params: SleighParams, ell: float) -> float:
+    """Fore-aft mass position ``a`` for an apex on the blade's axis before a launch over ``ell``.
+
+    Such a launch moves the mass back by about ``(M + m) ell / m``, which must not reach ``a = 0``
+    (the singular point of a line), so the apex sits twice that far ahead plus one model length.
+    """
+    return 2.0 * (params.M + params.m) / params.m * ell + params.length_scale
+
+
 def _glide_candidates(params: SleighParams, segs, g: int, ell: float,
                       options: TraceOptions) -> list[tuple[tuple[float, float], bool]]:
     """Mass positions ``((a, b), steady)`` to try at the apex on segment ``g``, most natural first.
@@ -305,9 +314,7 @@ def _glide_candidates(params: SleighParams, segs, g: int, ell: float,
     """
     kg = segs[g].curvature
     scale = params.length_scale
-    # On a line the mass is ahead of the blade: a launch over ell moves it back by about
-    # (M + m) ell / m, which must not reach a = 0 (the singular point of a line).
-    base = 2.0 * (params.M + params.m) / params.m * ell + scale
+    base = _line_apex(params, ell)
     if kg == 0.0:
         return [((base, 0.0), True), ((2.0 * base, 0.0), True), ((4.0 * base, 0.0), True)]
     if options.glide_lateral is not None:
@@ -325,7 +332,7 @@ def _glide_candidates(params: SleighParams, segs, g: int, ell: float,
     for b in out:
         if all(abs(b - c) > 1e-12 for c in seen):
             seen.append(b)
-    instant = 2.0 * (params.M + params.m) / params.m * (0.5 * segs[g].length) + scale
+    instant = _line_apex(params, 0.5 * segs[g].length)
     return [((0.0, b), True) for b in seen] + [((instant, 0.0), False), ((2.0 * instant, 0.0), False)]
 
 
