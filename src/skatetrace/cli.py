@@ -1,4 +1,4 @@
-"""Command-line interface: ``skatetrace trace``, ``skatetrace figures``.
+"""Command-line interface: ``skatetrace trace``, ``skatetrace figures``, ``skatetrace reproduce``.
 
 The only module that prints or exits. Exit codes: 0 success, 1 a solve or verification that
 failed, 2 a usage error (bad arguments, unreadable or malformed figure file).
@@ -33,6 +33,13 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--tol", type=float, default=1e-6, help="allowed deviation as a fraction of the figure size (default: 1e-6)")
     t.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     sub.add_parser("figures", help="list the built-in figures")
+    r = sub.add_parser("reproduce", help="reproduce the paper's tables three ways, with figures and errata")
+    r.add_argument("--out", default="rep", help="output folder (default: rep)")
+    r.add_argument("--methods", default="main,point,length",
+                   help="comma-separated subset of main (Tables 1-2), point (3-4), length (5-6)")
+    r.add_argument("--arcs", default="1,2,3", help="comma-separated subset of the arcs 1, 2, 3")
+    r.add_argument("--maxiter", type=int, help="cap on BFGS iterations of the re-run procedure (default: scipy's)")
+    r.add_argument("--no-figures", action="store_true", help="skip the figures (tables and errata only)")
     return p
 
 
@@ -89,6 +96,34 @@ def _trace(args) -> int:
     return 0 if (trace.success and report.success) else 1
 
 
+def _reproduce(args) -> int:
+    from .paper.report import reproduce, write_report
+
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    try:
+        arcs = [int(a) for a in args.arcs.split(",") if a.strip()]
+    except ValueError:
+        raise SkatetraceError(f"--arcs must be comma-separated arc numbers 1, 2, 3, got {args.arcs!r}") from None
+    if args.maxiter is not None and args.maxiter < 1:
+        raise SkatetraceError(f"--maxiter must be a positive number of iterations, got {args.maxiter}")
+    t0 = time.perf_counter()
+    rep = reproduce(methods, arcs, maxiter=args.maxiter,
+                    progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    paths = write_report(rep, args.out, figures=not args.no_figures)
+    print(f"{'row':>16} {'printed error':>13} {'published cost':>14} {'full dev.':>9} {'re-run cost':>11} "
+          f"{'full dev.':>9} {'exact dev.':>10}")
+    for rr in rep.rows:
+        err = rr.row.published_error
+        print(f"{'Table ' + rr.row.tables + ' arc ' + str(rr.row.arc):>16} {err if err is not None else float('nan'):>13.4g} "
+              f"{rr.published.cost:>14.3g} {rr.published.full_deviation:>9.2g} {rr.rerun.cost:>11.3g} "
+              f"{rr.rerun.full_deviation:>9.2g} {rr.exact.full_deviation:>10.2g}")
+    confirmed = sum(e.confirmed for e in rep.errata)
+    print(f"errata: {confirmed} of {len(rep.errata)} confirmed")
+    print(f"{rep.message}; wrote {len(paths)} files to {args.out}/ (report.md, report.html) in "
+          f"{time.perf_counter() - t0:.0f} s")
+    return 0 if rep.success else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = _parser()
@@ -101,6 +136,8 @@ def main(argv: list[str] | None = None) -> int:
             for name in pattern_names():
                 print(f"{name:22s} {pattern(name).description}")
             return 0
+        if args.command == "reproduce":
+            return _reproduce(args)
         return _trace(args)
     except (SkatetraceError, ValueError, TypeError) as exc:
         print(f"skatetrace: error: {exc}", file=sys.stderr)
