@@ -3,6 +3,7 @@
 The public API, re-exported explicitly.
 """
 
+from .deviation import DeviationCost, deviation_cost, segments_target
 from .errors import FigureFormatError, InfeasibleArcError, SkatetraceError
 from .figure import Curve, Figure, Join, figure_from_dict, load_figure
 from .geometry import Pose, Segment
@@ -13,9 +14,9 @@ from .tracing import FigureTrace, SectionTrace, TraceOptions, TraceStatus, trace
 from .verify import VerificationReport, schedule_from_trace, verify
 
 __all__ = [
-    "Curve", "Figure", "FigureFormatError", "FigureTrace", "InfeasibleArcError", "Join", "Pose",
+    "Curve", "DeviationCost", "Figure", "FigureFormatError", "FigureTrace", "InfeasibleArcError", "Join", "Pose",
     "SectionTrace", "Segment", "SkatetraceError", "SleighParams", "TraceOptions", "TraceStatus",
     "VerificationReport", "figure_from_dict", "load_figure", "pattern", "pattern_names",
-    "Trajectory", "schedule_from_trace", "simulate", "trace_figure", "trace_section", "verify",
+    "Trajectory", "deviation_cost", "schedule_from_trace", "segments_target", "simulate", "trace_figure", "trace_section", "verify",
 ]
 __version__ = "0.1.0"

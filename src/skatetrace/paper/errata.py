@@ -194,7 +194,9 @@ def find_errata(params: SleighParams, exact: Mapping[int, tuple[PaperRow, ArcEva
     Parameters
     ----------
     exact : mapping
-        Arc number -> (row, exact-engine evaluation) for the main method's arcs.
+        Arc number -> (row, exact-engine evaluation) for the main method's arcs; the invariant and
+        energy items are measured on the lowest arc with ``r != 1`` (where the printed and the correct
+        invariant differ), else on the lowest arc.
     published : sequence
         (row, evaluation of the published optimum) for every table row.
     best_costs : mapping, optional
@@ -203,8 +205,10 @@ def find_errata(params: SleighParams, exact: Mapping[int, tuple[PaperRow, ArcEva
         rounding of the printed parameters is never taken for a discrepancy.
     """
     out = []
-    if 1 in exact:
-        row, ev = exact[1]
+    if exact:
+        # p1 + p2/r and p1 + r p2 coincide when r = 1: measure on an arc with r != 1 if there is one.
+        k = min(exact, key=lambda a: (exact[a][0].radius == 1.0, a))
+        row, ev = exact[k]
         out += [_invariant(row, ev), _skate_energy(params, row, ev), _mass_velocity(params, row, ev)]
     if exact:
         out.append(_b_singular_set(params, exact))
