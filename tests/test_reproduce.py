@@ -53,7 +53,8 @@ def test_reading_study_covers_every_reading(small):
     readings = small.readings
     assert {(d["closure"], d["time"]) for d in readings} == {(c, t) for c in ("xi2", "xi1", "formulas")
                                                              for t in ("each", "split")}
-    assert len(readings) == 3 * 6
+    assert {d["events"] for d in readings} == {"all zeros", "step ends"}
+    assert len(readings) == 3 * 6 * 2
     # no reading brings any published optimum to its printed error
     assert all(d["cost"] > 10 * d["printed_error"] for d in readings)
 

@@ -72,8 +72,9 @@ class ArcEvaluation:
     seconds : float
         Wall time of producing the arc (procedure or exact engine), if known.
     ok : bool
-        The full dynamics stayed on the circle within ``1e-6`` and stopped at both ends within
-        ``1e-6``: the arc really is what it claims.
+        The model's arc stopped at both ends, and the full dynamics reached both ends, stayed on
+        the circle within ``1e-6`` and stopped there within ``1e-6``: the arc really is what it
+        claims.
     notes : tuple of str
     series : dict
         Sampled reduced (or exact) solution for plots; ``full`` holds the full-dynamics samples.
@@ -104,7 +105,8 @@ class ArcEvaluation:
     @property
     def ok(self) -> bool:
         speeds = [abs(v) for v in self.full_end_speeds]
-        return bool(self.full_success and self.full_deviation <= 1e-6 and speeds and max(speeds) <= 1e-6)
+        return bool(self.completed and self.full_success and self.full_deviation <= 1e-6 and speeds
+                    and max(speeds) <= 1e-6)
 
     def to_dict(self) -> dict:
         keys = ("label", "values", "cost", "length_error", "end_speeds", "completed", "full_deviation",

@@ -30,7 +30,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolution, Radau
+from scipy.optimize import brentq
 
 from ..model import SleighParams, velocities
 from .controls import CircularControl, HarmonicControl, b_rate_printed
@@ -38,6 +39,7 @@ from .controls import CircularControl, HarmonicControl, b_rate_printed
 __all__ = ["ReducedOptions", "HalfArc", "ReducedArc", "integrate_reduced", "PAPER_SOLVER", "TIGHT_SOLVER"]
 
 _CLOSURES = ("xi2", "xi1", "formulas")
+_SOLVERS = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA, "RK45": RK45, "RK23": RK23, "DOP853": DOP853}
 _TIMES = ("each", "split")
 
 
@@ -58,6 +60,10 @@ class ReducedOptions:
     max_nfev : int
         Budget of right-hand-side calls per direction; a half-arc that exhausts it stops there
         (status ``"budget"``), as near the singularity ``a = 0`` of (b_diff_eq).
+    fine_events : int
+        Interior points per step at which the speed's sign is also checked (0: only at step ends,
+        as solve_ivp does and the paper's runs did). A speed that dips through zero and back within
+        one step is otherwise missed.
     """
 
     closure: str = "xi2"
@@ -66,20 +72,23 @@ class ReducedOptions:
     rtol: float = 1e-3
     atol: float = 1e-6
     max_nfev: int = 200_000
+    fine_events: int = 0
 
     def __post_init__(self) -> None:
         if self.closure not in _CLOSURES:
             raise ValueError(f"closure must be one of {_CLOSURES}, got {self.closure!r}")
         if self.time not in _TIMES:
             raise ValueError(f"time must be one of {_TIMES}, got {self.time!r}")
-        if not (self.rtol > 0 and self.atol > 0 and self.max_nfev > 0):
-            raise ValueError("rtol, atol and max_nfev must be positive")
+        if self.method not in _SOLVERS:
+            raise ValueError(f"method must be one of {sorted(_SOLVERS)}, got {self.method!r}")
+        if not (self.rtol > 0 and self.atol > 0 and self.max_nfev > 0 and self.fine_events >= 0):
+            raise ValueError("rtol, atol and max_nfev must be positive and fine_events >= 0")
 
 
 #: The paper's own solver settings: BDF at scipy's default tolerances.
 PAPER_SOLVER = ReducedOptions()
 #: Settings used to evaluate a parameter set accurately (the numbers in the report).
-TIGHT_SOLVER = ReducedOptions(method="DOP853", rtol=1e-11, atol=1e-12)
+TIGHT_SOLVER = ReducedOptions(method="DOP853", rtol=1e-11, atol=1e-12, fine_events=8)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -198,69 +207,72 @@ def _evaluate(params, r, c, control, options, t, y) -> dict[str, float]:
             "bdot": bdot, "xi1": xi1, "xi2": xi2, "eta": eta, "speed": speed, "turn": turn}
 
 
-class _Budget(Exception):
-    pass
-
-
 def _half(params, r, c, control, options, y0, t_end) -> HalfArc:
+    """Step ``options.method`` from 0 to ``t_end``, stopping where the speed changes sign.
+
+    The loop is solve_ivp's (sign of the event at step ends, root by Brent's method on the dense
+    output, ``xtol`` 4 eps), with two additions: an evaluation budget, and, if
+    ``options.fine_events``, a sign check at interior points of each step so that a speed that
+    dips through zero and back within one step is not missed.
+    """
     m = params.m
-    calls = [0]
     appendix = isinstance(control, HarmonicControl)
 
     def f(t, y):
-        calls[0] += 1
-        if calls[0] > options.max_nfev:
-            raise _Budget
         v = _evaluate(params, r, c, control, options, t, y)
         out = [-m * v["eta"] * v["speed"], v["turn"], v["speed"] * math.cos(y[1]), v["speed"] * math.sin(y[1])]
         if appendix:
             out.append(v["bdot"])
         return out
 
-    def stopped(t, y):
+    def speed(t, y):
         return _evaluate(params, r, c, control, options, t, y)["speed"]
 
-    stopped.terminal = True
-    try:
-        with np.errstate(all="ignore"):  # a singular control shows up as a failed half, not a warning
-            sol = solve_ivp(f, (0.0, t_end), y0, method=options.method, rtol=options.rtol, atol=options.atol,
-                            events=stopped, dense_output=True)
-    except _Budget:
-        # Re-run with the budget as a hard end to keep what was integrated; a singular control
-        # (a -> 0 in (b_diff_eq)) is where this happens.
-        return _truncated(f, stopped, options, y0, t_end, calls)
-    if sol.status == 1:
-        status, msg = "stopped", f"speed vanished at t = {sol.t[-1]:.6g}"
-    elif sol.status == 0:
-        status, msg = "time", f"reached t = {t_end:g} still moving"
-    else:
-        status, msg = "failed", f"integration failed at t = {sol.t[-1]:.6g}: {sol.message}"
-    return HalfArc(t=sol.t, state=sol.y, sol=sol.sol, status=status, message=msg, nfev=int(sol.nfev))
-
-
-def _truncated(f, stopped, options, y0, t_end, calls) -> HalfArc:
-    ts, ys = [0.0], [np.asarray(y0, dtype=float)]
-    from scipy.integrate import BDF, DOP853, LSODA, RK45, Radau
-
-    solver_cls = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA, "RK45": RK45, "DOP853": DOP853}[options.method]
-    calls[0] = -10 ** 12  # no budget inside the step loop below; it counts steps instead
-    solver = solver_cls(f, 0.0, np.asarray(y0, dtype=float), t_end, rtol=options.rtol, atol=options.atol)
-    interps = []
-    for _ in range(options.max_nfev // 10):
-        msg = solver.step()
-        if solver.status != "running" and msg is not None:
-            break
-        interps.append(solver.dense_output())
-        ts.append(solver.t)
-        ys.append(solver.y.copy())
-        if stopped(solver.t, solver.y) * stopped(ts[-2], ys[-2]) < 0 or solver.status == "finished":
-            break
-    from scipy.integrate._ivp.common import OdeSolution
-
+    y0 = np.asarray(y0, dtype=float)
+    ts, ys, interps = [0.0], [y0], []
+    status, msg, stuck = "time", f"reached t = {t_end:g} still moving", 0
+    with np.errstate(all="ignore"):  # a singular control shows up as a failed half, not a warning
+        solver = _SOLVERS[options.method](f, 0.0, y0, t_end, rtol=options.rtol, atol=options.atol)
+        g_prev = speed(0.0, y0)
+        while True:
+            message = solver.step()
+            if solver.status == "failed" or not np.all(np.isfinite(solver.y)):
+                status, msg = "failed", f"integration failed at t = {ts[-1]:.6g}: {message or 'non-finite state'}"
+                break
+            if solver.t == ts[-1]:  # LSODA can return without advancing where steps collapse
+                stuck += 1
+                if stuck > 50:
+                    status, msg = "failed", f"integration failed at t = {ts[-1]:.6g}: no progress"
+                    break
+                continue
+            dense = solver.dense_output()
+            grid = (np.linspace(ts[-1], solver.t, options.fine_events + 2) if options.fine_events
+                    else np.array([ts[-1], solver.t]))
+            g = [g_prev] + [speed(float(tk), dense(float(tk))) for tk in grid[1:]]
+            root = None
+            for k in range(1, len(grid)):
+                if g[k - 1] * g[k] < 0 or (g[k] == 0.0 and g[k - 1] != 0.0):
+                    ta, tb = float(grid[k - 1]), float(grid[k])
+                    root = tb if g[k] == 0.0 else brentq(lambda tt: speed(tt, dense(tt)), ta, tb,
+                                                         xtol=4 * np.finfo(float).eps)
+                    break
+            interps.append(dense)
+            if root is not None:
+                ts.append(root)
+                ys.append(dense(root))
+                status, msg = "stopped", f"speed vanished at t = {root:.6g}"
+                break
+            ts.append(solver.t)
+            ys.append(solver.y.copy())
+            g_prev = g[-1]
+            if solver.status == "finished":
+                break
+            if solver.nfev > options.max_nfev:
+                status, msg = "budget", (f"stopped at t = {solver.t:.6g} after {solver.nfev} evaluations, the "
+                                         "budget (step sizes collapse near a singular control)")
+                break
     sol = OdeSolution(np.array(ts), interps) if interps else None
-    return HalfArc(t=np.array(ts), state=np.array(ys).T, sol=sol, status="budget",
-                   message=f"stopped at t = {ts[-1]:.6g} after the evaluation budget: step sizes collapsed "
-                           "(a singular control)", nfev=int(options.max_nfev))
+    return HalfArc(t=np.array(ts), state=np.array(ys).T, sol=sol, status=status, message=msg, nfev=int(solver.nfev))
 
 
 def integrate_reduced(params: SleighParams, radius: float, initial, control: CircularControl | HarmonicControl,
