@@ -297,9 +297,12 @@ def integrate_reduced(params: SleighParams, radius: float, initial, control: Cir
     --------
     >>> from skatetrace.paper.tables import paper_row
     >>> row = paper_row("main", 1)
-    >>> arc = integrate_reduced(SleighParams(), row.radius, row.initial, CircularControl(*row.published), row.T)
-    >>> arc.completed
-    True
+    >>> ctrl = CircularControl(*row.published)
+    >>> arc = integrate_reduced(SleighParams(), row.radius, row.initial, ctrl, row.T, TIGHT_SOLVER)
+    >>> arc.completed, round(arc.length, 4), round(row.target_length, 4)  # far from L_opt
+    (True, 2.0357, 4.1469)
+    >>> integrate_reduced(SleighParams(), row.radius, row.initial, ctrl, row.T).backward.message  # the paper's BDF
+    'reached t = -6 still moving'
     """
     if not (radius > 0 and math.isfinite(radius)):
         raise ValueError(f"radius must be a positive number, got {radius!r}")
