@@ -1,0 +1,304 @@
+"""Plane curves as the user draws them, before any arc fitting.
+
+A :class:`Path` is a sequence of smooth parametric pieces, each defined on ``t`` in ``[0, 1]`` with
+exact first and second derivatives where they are known (lines, Béziers, elliptic arcs, splines
+through points) and central differences otherwise (a Python function). Consecutive pieces meet
+end to start; where their tangents differ there is a corner. A :class:`Drawing` is a set of paths
+in one coordinate system. Nothing here knows about arcs, fitting or mechanics.
+
+Every piece evaluates vectorised: ``point(t)``, ``d1(t)`` and ``d2(t)`` take an array of ``t`` and
+return arrays of shape ``(2, len(t))``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+
+__all__ = [
+    "Piece", "LinePiece", "BezierPiece", "EllipticArcPiece", "FunctionPiece", "SplinePiece", "AffinePiece",
+    "Path", "Drawing", "curvature", "piece_length",
+]
+
+
+def _t(t) -> np.ndarray:
+    return np.atleast_1d(np.asarray(t, dtype=float))
+
+
+class Piece:
+    """Interface of a smooth piece on ``t`` in ``[0, 1]``."""
+
+    def point(self, t) -> np.ndarray:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def d1(self, t) -> np.ndarray:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def d2(self, t) -> np.ndarray:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    @property
+    def start(self) -> np.ndarray:
+        return self.point(0.0)[:, 0]
+
+    @property
+    def end(self) -> np.ndarray:
+        return self.point(1.0)[:, 0]
+
+
+@dataclass(frozen=True, slots=True)
+class LinePiece(Piece):
+    """Straight segment from ``p0`` to ``p1``."""
+
+    p0: tuple[float, float]
+    p1: tuple[float, float]
+
+    def point(self, t):
+        t = _t(t)
+        a, b = np.asarray(self.p0, float), np.asarray(self.p1, float)
+        return a[:, None] + (b - a)[:, None] * t
+
+    def d1(self, t):
+        t = _t(t)
+        return np.repeat((np.asarray(self.p1, float) - np.asarray(self.p0, float))[:, None], t.size, axis=1)
+
+    def d2(self, t):
+        return np.zeros((2, _t(t).size))
+
+
+@dataclass(frozen=True, slots=True)
+class BezierPiece(Piece):
+    """Bézier curve of degree ``len(control) - 1`` (1 to 3 in SVG) through Bernstein polynomials."""
+
+    control: tuple[tuple[float, float], ...]
+
+    def __post_init__(self) -> None:
+        if len(self.control) < 2:
+            raise ValueError("a Bézier piece needs at least two control points")
+
+    def _eval(self, pts: np.ndarray, t: np.ndarray) -> np.ndarray:
+        n = len(pts) - 1
+        if n < 0:
+            return np.zeros((2, t.size))
+        out = np.zeros((2, t.size))
+        for i, p in enumerate(pts):
+            out += np.outer(p, math.comb(n, i) * t ** i * (1 - t) ** (n - i))
+        return out
+
+    def point(self, t):
+        return self._eval(np.asarray(self.control, float), _t(t))
+
+    def d1(self, t):
+        p = np.asarray(self.control, float)
+        n = len(p) - 1
+        return self._eval(n * np.diff(p, axis=0), _t(t))
+
+    def d2(self, t):
+        p = np.asarray(self.control, float)
+        n = len(p) - 1
+        if n < 2:
+            return np.zeros((2, _t(t).size))
+        return self._eval(n * (n - 1) * np.diff(p, n=2, axis=0), _t(t))
+
+
+@dataclass(frozen=True, slots=True)
+class EllipticArcPiece(Piece):
+    """``centre + R(rotation) (rx cos(th), ry sin(th))`` with ``th = theta0 + t * dtheta``."""
+
+    centre: tuple[float, float]
+    rx: float
+    ry: float
+    rotation: float
+    theta0: float
+    dtheta: float
+
+    def _frame(self):
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        return np.array([[c, -s], [s, c]])
+
+    def _local(self, t, order):
+        th = self.theta0 + _t(t) * self.dtheta
+        k = self.dtheta ** order
+        funcs = [(np.cos, np.sin), (lambda x: -np.sin(x), np.cos), (lambda x: -np.cos(x), lambda x: -np.sin(x))]
+        fx, fy = funcs[order]
+        return k * np.vstack([self.rx * fx(th), self.ry * fy(th)])
+
+    def point(self, t):
+        return np.asarray(self.centre, float)[:, None] + self._frame() @ self._local(t, 0)
+
+    def d1(self, t):
+        return self._frame() @ self._local(t, 1)
+
+    def d2(self, t):
+        return self._frame() @ self._local(t, 2)
+
+
+@dataclass(frozen=True, slots=True)
+class FunctionPiece(Piece):
+    """A user's ``fn(u) -> (x, y)`` on ``u`` in ``[u0, u1]``, mapped to ``t`` in ``[0, 1]``.
+
+    ``fn`` must accept a numpy array of ``u`` and return two arrays (or an array of shape
+    ``(2, n)``). Derivatives ``d1``/``d2`` of ``fn`` with respect to ``u`` may be given; otherwise
+    they are central differences with a step suited to double precision.
+    """
+
+    fn: Callable
+    u0: float = 0.0
+    u1: float = 1.0
+    dfn: Callable | None = None
+    d2fn: Callable | None = None
+
+    def _u(self, t):
+        return self.u0 + _t(t) * (self.u1 - self.u0)
+
+    @staticmethod
+    def _call(f, u) -> np.ndarray:
+        out = np.asarray(f(u), dtype=float)
+        if out.shape == (2,) and u.size == 1:
+            out = out[:, None]
+        if out.shape != (2, u.size):
+            raise ValueError(f"a parametric curve must return x and y of shape (2, n); got {out.shape}")
+        return out
+
+    def point(self, t):
+        return self._call(self.fn, self._u(t))
+
+    def d1(self, t):
+        u, k = self._u(t), self.u1 - self.u0
+        if self.dfn is not None:
+            return k * self._call(self.dfn, u)
+        h = 1e-5 * max(1.0, abs(k))
+        return k * (self._call(self.fn, u + h) - self._call(self.fn, u - h)) / (2 * h)
+
+    def d2(self, t):
+        u, k = self._u(t), self.u1 - self.u0
+        if self.d2fn is not None:
+            return k * k * self._call(self.d2fn, u)
+        h = 1e-4 * max(1.0, abs(k))
+        return k * k * (self._call(self.fn, u + h) - 2 * self._call(self.fn, u) + self._call(self.fn, u - h)) / h ** 2
+
+
+@dataclass(frozen=True, slots=True)
+class SplinePiece(Piece):
+    """A scipy piecewise polynomial ``spline(u) -> (n, 2)`` on ``[u0, u1]`` (e.g. CubicSpline)."""
+
+    spline: object
+    u0: float
+    u1: float
+
+    def _ev(self, t, nu):
+        u = self.u0 + _t(t) * (self.u1 - self.u0)
+        return np.asarray(self.spline(u, nu), dtype=float).T * (self.u1 - self.u0) ** nu
+
+    def point(self, t):
+        return self._ev(t, 0)
+
+    def d1(self, t):
+        return self._ev(t, 1)
+
+    def d2(self, t):
+        return self._ev(t, 2)
+
+
+@dataclass(frozen=True, slots=True)
+class AffinePiece(Piece):
+    """``A @ base(t) + b``: any piece under an affine map (SVG transforms, scaling, y flip)."""
+
+    base: Piece
+    A: tuple[tuple[float, float], tuple[float, float]]
+    b: tuple[float, float] = (0.0, 0.0)
+
+    def point(self, t):
+        return np.asarray(self.A, float) @ self.base.point(t) + np.asarray(self.b, float)[:, None]
+
+    def d1(self, t):
+        return np.asarray(self.A, float) @ self.base.d1(t)
+
+    def d2(self, t):
+        return np.asarray(self.A, float) @ self.base.d2(t)
+
+
+def curvature(piece: Piece, t) -> np.ndarray:
+    """Signed curvature ``(x' y'' - y' x'') / |r'|^3`` (positive turns left); NaN where ``r' = 0``."""
+    d1, d2 = piece.d1(t), piece.d2(t)
+    sp = np.hypot(d1[0], d1[1])
+    with np.errstate(all="ignore"):
+        k = (d1[0] * d2[1] - d1[1] * d2[0]) / sp ** 3
+    return np.where(sp > 0, k, np.nan)
+
+
+def piece_length(piece: Piece, t0: float = 0.0, t1: float = 1.0, n: int = 64) -> float:
+    """Arc length between ``t0`` and ``t1`` by Gauss-Legendre quadrature on ``n`` nodes."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    t = 0.5 * (t1 - t0) * x + 0.5 * (t1 + t0)
+    d = piece.d1(t)
+    return float(0.5 * (t1 - t0) * np.sum(w * np.hypot(d[0], d[1])))
+
+
+@dataclass(frozen=True, slots=True)
+class Path:
+    """Pieces joined end to start. ``closed`` if the last piece ends where the first starts."""
+
+    pieces: tuple[Piece, ...]
+    closed: bool = False
+    name: str = "path"
+
+    def __post_init__(self) -> None:
+        if not self.pieces:
+            raise ValueError(f"path {self.name!r} is empty: it has no pieces")
+
+    def points(self, n: int = 64) -> np.ndarray:
+        """``n`` points per piece, shape ``(2, m)``."""
+        return np.hstack([p.point(np.linspace(0.0, 1.0, n)) for p in self.pieces])
+
+    def transformed(self, A, b=(0.0, 0.0)) -> "Path":
+        A = tuple(tuple(float(v) for v in row) for row in A)
+        b = tuple(float(v) for v in b)
+        return Path(tuple(AffinePiece(p, A, b) for p in self.pieces), self.closed, self.name)
+
+    def length(self) -> float:
+        return sum(piece_length(p) for p in self.pieces)
+
+
+@dataclass(frozen=True, slots=True)
+class Drawing:
+    """Paths in one coordinate system, with where they came from and what one unit means."""
+
+    paths: tuple[Path, ...]
+    name: str = "drawing"
+    source: str = ""
+    unit: str = "model"  # "model" (the sleigh's units) or "m"
+    notes: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if not self.paths:
+            raise ValueError(f"drawing {self.name!r} has no paths")
+
+    def bbox(self) -> tuple[float, float, float, float]:
+        pts = np.hstack([p.points(129) for p in self.paths])
+        return float(pts[0].min()), float(pts[1].min()), float(pts[0].max()), float(pts[1].max())
+
+    def size(self) -> float:
+        x0, y0, x1, y1 = self.bbox()
+        return max(x1 - x0, y1 - y0)
+
+    def scaled_to(self, size: float, unit: str | None = None) -> "Drawing":
+        """Uniformly scaled about the bounding-box centre so that its larger side is ``size``, moved to the origin."""
+        if not (size > 0 and math.isfinite(size)):
+            raise ValueError(f"size must be a positive length, got {size!r}")
+        cur = self.size()
+        if not cur > 0:
+            raise ValueError(f"drawing {self.name!r} has zero extent: all its points coincide")
+        x0, y0, x1, y1 = self.bbox()
+        k = size / cur
+        A = ((k, 0.0), (0.0, k))
+        b = (-k * 0.5 * (x0 + x1), -k * 0.5 * (y0 + y1))
+        return Drawing(tuple(p.transformed(A, b) for p in self.paths), self.name, self.source,
+                       unit if unit is not None else self.unit, self.notes)
+
+
+def _as_points(seq: Sequence) -> np.ndarray:
+    return np.asarray(seq, dtype=float)
