@@ -1,6 +1,6 @@
 """Exceptions raised by skatetrace."""
 
-__all__ = ["SkatetraceError", "FigureFormatError", "InfeasibleArcError"]
+__all__ = ["SkatetraceError", "DrawingError", "FigureFormatError", "InfeasibleArcError", "FitError"]
 
 
 class SkatetraceError(Exception):
@@ -13,3 +13,14 @@ class FigureFormatError(SkatetraceError, ValueError):
 
 class InfeasibleArcError(SkatetraceError, ValueError):
     """A piece cannot be traced with the requested options."""
+
+
+class DrawingError(SkatetraceError, ValueError):
+    """A drawing (SVG, point list, parametric curve) or a length cannot be read.
+
+    The message names the input (file, element, line) and what would be accepted.
+    """
+
+
+class FitError(SkatetraceError, ValueError):
+    """A curve cannot be fitted with arcs as asked (bad tolerance, gaps, zero length, non-finite points)."""
