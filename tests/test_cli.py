@@ -56,7 +56,7 @@ def test_bad_inputs_exit_2(tmp_path, capsys):
 def test_failed_verification_exits_1_and_still_writes_everything(tmp_path, capsys):
     """A tolerance no integrator can meet fails verification: exit 1, but nothing is lost."""
     out = tmp_path / "out"
-    assert main(["trace", "circle", "--out", str(out), "--tol", "1e-16", "--no-plots"]) == 1
+    assert main(["trace", "circle", "--out", str(out), "--verify-tol", "1e-16", "--no-plots"]) == 1
     report = json.loads((out / "report.json").read_text())
     assert not report["success"] and "exceeds" in report["message"]
     assert (out / "controls.csv").exists() and (out / "result.json").exists()

@@ -1,4 +1,4 @@
-"""Command-line interface: ``skatetrace trace``, ``skatetrace figures``, ``skatetrace reproduce``.
+"""Command-line interface: ``skatetrace trace``, ``fit``, ``figures`` and ``reproduce``.
 
 The only module that prints or exits. Exit codes: 0 success, 1 a solve or verification that
 failed, 2 a usage error (bad arguments, unreadable or malformed figure file).
@@ -7,32 +7,59 @@ failed, 2 a usage error (bad arguments, unreadable or malformed figure file).
 from __future__ import annotations
 
 import argparse
+import json
+import math
 import sys
 import time
 from pathlib import Path
 
 from .errors import SkatetraceError
-from .figure import load_figure
 from .model import SleighParams
 from .patterns import pattern, pattern_names
+from .sources import DRAWING_SUFFIXES
 from .tracing import TraceOptions, trace_figure
 
 __all__ = ["main"]
+
+
+def _add_source_args(t) -> None:
+    g = t.add_argument_group("drawings (SVG, point lists)")
+    g.add_argument("--size", help="scale the drawing so its larger side is this, e.g. 6m or 12 (model units); "
+                                  "default: the drawing's own units")
+    g.add_argument("--tol", help="fitting tolerance, a certified Hausdorff distance, e.g. 1mm or 1e-3 "
+                                 "(figure units); default 1e-3 of the figure's size")
+    g.add_argument("--fit", dest="method", choices=("greedy", "min"), default="greedy",
+                   help="arc-spline fit: greedy subdivision or the minimum number of arcs (default greedy)")
+    s = t.add_argument_group("school figures (school:NAME)")
+    s.add_argument("--height", type=float, default=1.7, help="skater height in m (default 1.7)")
+    s.add_argument("--body-mass", type=float, default=60.0, help="skater body mass in kg (default 60)")
+    s.add_argument("--blade", type=float, default=0.28, help="blade length in m (default 0.28)")
+    s.add_argument("--edge", default="outside", help="outside or inside (default outside)")
+    s.add_argument("--direction", default="forward", help="forward or backward (default forward)")
+    s.add_argument("--foot", default="right", help="right or left (default right)")
 
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="skatetrace", description="Controls that make a skater trace a figure exactly.")
     sub = p.add_subparsers(dest="command", required=True)
     t = sub.add_parser("trace", help="trace a figure, verify it by re-simulation, write results")
-    t.add_argument("figure", help=f"a built-in figure ({', '.join(pattern_names())}) or a figure JSON file")
+    t.add_argument("figure", help=f"a built-in figure ({', '.join(pattern_names())}), school:NAME, a figure JSON "
+                                  "file, or a drawing (.svg, .csv, .txt, .dat)")
     t.add_argument("--out", default="out", help="output folder (default: out)")
     t.add_argument("--M", type=float, help="sleigh mass (default: the figure's, else 2)")
     t.add_argument("--m", type=float, help="moving mass (default: the figure's, else 1)")
     t.add_argument("--I", type=float, help="sleigh inertia about the contact point (default: the figure's, else 3)")
-    t.add_argument("--speed", type=float, default=1.0, help="glide speed (default: 1)")
-    t.add_argument("--tol", type=float, default=1e-6, help="allowed deviation as a fraction of the figure size (default: 1e-6)")
+    t.add_argument("--speed", type=float, help="glide speed (default: 1 model unit, 2 m/s for figures in metres)")
+    t.add_argument("--verify-tol", type=float, default=1e-6,
+                   help="allowed deviation from the traced arcs as a fraction of the figure size (default 1e-6)")
     t.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
-    sub.add_parser("figures", help="list the built-in figures")
+    _add_source_args(t)
+    f = sub.add_parser("fit", help="fit a drawing by arcs and lines only: pieces, arcs, certified tolerance, plot")
+    f.add_argument("drawing", help="an SVG file or a point list (.csv, .txt, .dat)")
+    f.add_argument("--out", default="fit", help="output folder for fit.json and fit.png (default: fit)")
+    f.add_argument("--no-plots", action="store_true", help="skip fit.png")
+    _add_source_args(f)
+    sub.add_parser("figures", help="list the built-in figures and the school figures")
     r = sub.add_parser("reproduce", help="reproduce the paper's tables three ways, with figures and errata")
     r.add_argument("--out", default="rep", help="output folder (default: rep)")
     r.add_argument("--methods", default="main,point,length",
@@ -43,13 +70,71 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _load(name: str):
-    if name in pattern_names():
-        return pattern(name)
-    path = Path(name)
-    if path.suffix.lower() == ".json" or path.exists():
-        return load_figure(path)
-    raise SkatetraceError(f"unknown figure {name!r}: not a built-in ({', '.join(pattern_names())}) and no such file")
+def _resolve(args, name: str):
+    from .sources import resolve
+
+    return resolve(name, size=args.size, tol=args.tol, method=args.method, height=args.height, blade=args.blade,
+                   edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass)
+
+
+def _fit_summary(res) -> dict:
+    fit = res.fit
+    return {
+        "schema": "skatetrace.fit/1", "success": fit.success, "message": fit.message, "unit": res.unit,
+        "tol": res.tol, "hausdorff_certified": fit.hausdorff, "hausdorff_sampled": fit.hausdorff_sampled,
+        "n_arcs": fit.n_arcs, "n_lines": fit.n_lines, "notes": list(res.notes),
+        "paths": [{
+            "name": pf.name, "closed": pf.closed, "runs": len(pf.runs), "n_arcs": pf.n_arcs, "n_lines": pf.n_lines,
+            "hausdorff_certified": pf.hausdorff, "hausdorff_sampled": pf.hausdorff_sampled,
+            "where": None if pf.where is None else pf.where._asdict(), "curve_length": pf.curve_length,
+            "spline_length": pf.spline_length, "method": pf.method, "greedy_count": pf.greedy_count,
+            "min_count": pf.min_count,
+            "corners_deg": [None if r.corner is None else math.degrees(r.corner) for r in pf.runs],
+        } for pf in fit.paths],
+        "figure": res.figure.to_dict(),
+    }
+
+
+def _write_fit(res, out: Path, plots: bool) -> list[Path]:
+    from .io import atomic_write
+
+    written = [out / "fit.json"]
+    atomic_write(out / "fit.json", json.dumps(_fit_summary(res), indent=2, default=float))
+    if plots:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from .plotting import plot_fit
+
+        fig, ax = plt.subplots(figsize=(8, 8))
+        plot_fit(res.drawing, res.fit, ax)
+        fig.savefig(out / "fit.png", dpi=110)
+        plt.close(fig)
+        written.append(out / "fit.png")
+    return written
+
+
+def _fit(args) -> int:
+    t0 = time.perf_counter()
+    res = _resolve(args, args.drawing)
+    if res.kind != "drawing":
+        raise SkatetraceError(f"{args.drawing!r} is not a drawing: 'fit' takes an SVG or a point list "
+                              f"({', '.join(DRAWING_SUFFIXES)})")
+    out = Path(args.out)
+    paths = _write_fit(res, out, not args.no_plots)
+    fit = res.fit
+    print(f"drawing {res.drawing.name}: {len(fit.paths)} path(s), {res.drawing.size():.4g} {res.unit} across")
+    print(f"{'path':>4} {'name':>16} {'runs':>5} {'arcs':>5} {'lines':>6} {'greedy':>7} {'min':>5} "
+          f"{'hausdorff':>10} {'where (x, y)':>22}")
+    for i, pf in enumerate(fit.paths):
+        where = "" if pf.where is None else f"({pf.where.x:.4g}, {pf.where.y:.4g})"
+        print(f"{i:>4} {pf.name[:16]:>16} {len(pf.runs):>5} {pf.n_arcs:>5} {pf.n_lines:>6} {pf.greedy_count:>7} "
+              f"{'-' if pf.min_count is None else pf.min_count:>5} {pf.hausdorff:>10.3g} {where:>22}")
+    print(f"certified Hausdorff distance {fit.hausdorff:.3g} <= tolerance {res.tol:.3g} {res.unit}; "
+          f"wrote {', '.join(p.name for p in paths)} to {out}/ in {time.perf_counter() - t0:.1f} s")
+    return 0
 
 
 def _trace(args) -> int:
@@ -57,11 +142,15 @@ def _trace(args) -> int:
     from .verify import schedule_from_trace, verify
 
     t0 = time.perf_counter()
-    figure = _load(args.figure)
+    res = _resolve(args, args.figure)
+    figure = res.figure
     base = figure.params or SleighParams()
     params = SleighParams(M=args.M if args.M is not None else base.M, m=args.m if args.m is not None else base.m,
                           I=args.I if args.I is not None else base.I)
-    options = TraceOptions(speed=args.speed)
+    speed = args.speed if args.speed is not None else (2.0 if res.unit == "m" else 1.0)
+    options = TraceOptions(speed=speed)
+    for note in res.notes:
+        print(f"note: {note}")
 
     def progress(done, total):
         print(f"\rtracing sections {done}/{total}", end="", file=sys.stderr, flush=True)
@@ -69,31 +158,43 @@ def _trace(args) -> int:
     trace = trace_figure(figure, params, options, progress=progress)
     print(file=sys.stderr)
     schedule, states = schedule_from_trace(trace)
-    report = verify(trace, schedule, rel_tol=args.tol)
+    report = verify(trace, schedule, rel_tol=args.verify_tol)
     out = Path(args.out)
     write_results(out, trace, schedule, states, report)
+    if res.fit is not None:
+        _write_fit(res, out, not args.no_plots)
     if not args.no_plots:
         from .plotting import save_all
 
         save_all(trace, report, out)
     elapsed = time.perf_counter() - t0
+    unit = "m" if res.unit == "m" else "model units"
     print(f"figure {figure.name}: {len(figure.curves)} curve(s), {len(trace.sections)} section(s), "
-          f"M={params.M:g} m={params.m:g} I={params.I:g}")
+          f"M={params.M:g} m={params.m:g} I={params.I:g} ({'SI: kg, kg m^2, m, s' if res.unit == 'm' else 'model units'})")
     print(f"{'section':>7} {'pieces':>14} {'length':>9} {'duration':>9} {'max residual':>13} {'status':>8}")
     for i, s in enumerate(trace.sections):
-        res = max(s.residuals.values()) if s.residuals else float("nan")
+        resid = max(s.residuals.values()) if s.residuals else float("nan")
         pcs = ",".join(str(p.index) for p in s.section.pieces)
-        print(f"{i:>7} {pcs:>14} {s.length:>9.4f} {s.duration:>9.4f} {res:>13.2e} {'ok' if s.success else 'FAILED':>8}")
+        if len(pcs) > 14:
+            pcs = pcs[:6] + ".." + pcs[-6:]
+        print(f"{i:>7} {pcs:>14} {s.length:>9.4f} {s.duration:>9.4f} {resid:>13.2e} {'ok' if s.success else 'FAILED':>8}")
         if not s.success:
             print(f"        reason: {s.message}")
     for c in figure.curves:
         cl = c.closure()
         print(f"curve {c.name}: {'closed' if cl['closed'] else 'open'} (end-to-start gap {cl['position_gap']:.2e}, "
               f"heading gap {cl['heading_gap']:.2e} rad)")
-    print(f"max deviation {report.max_deviation:.3e} (tolerance {report.tolerance:.3e}, figure size {report.figure_size:.4g}); "
-          f"max cusp speed {report.max_cusp_speed:.3e}")
+    print(f"max deviation from the traced arcs {report.max_deviation:.3e} {unit} (tolerance {report.tolerance:.3e}, "
+          f"figure size {report.figure_size:.4g}); max cusp speed {report.max_cusp_speed:.3e}")
+    ok = trace.success and report.success
+    if res.fit is not None:
+        bound = res.fit.hausdorff + report.max_deviation
+        allowed = res.tol + args.verify_tol * report.figure_size
+        ok = ok and bound <= allowed
+        print(f"deviation from the drawing <= {bound:.3e} {unit} (certified fit {res.fit.hausdorff:.3e} + replay "
+              f"{report.max_deviation:.3e}); allowed {allowed:.3e} (fit tolerance + {args.verify_tol:g} x size)")
     print(f"verification: {report.status} ({report.message}); wrote {out}/ in {elapsed:.1f} s")
-    return 0 if (trace.success and report.success) else 1
+    return 0 if ok else 1
 
 
 def _reproduce(args) -> int:
@@ -133,9 +234,15 @@ def main(argv: list[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         if args.command == "figures":
+            from .school import school_names
+
             for name in pattern_names():
-                print(f"{name:22s} {pattern(name).description}")
+                print(f"{name:24s} {pattern(name).description}")
+            for name in school_names():
+                print(f"school:{name:17s} school figure sized for a skater (--height, --edge, --direction, --foot)")
             return 0
+        if args.command == "fit":
+            return _fit(args)
         if args.command == "reproduce":
             return _reproduce(args)
         return _trace(args)

@@ -184,6 +184,23 @@ class Curve:
         pts = np.hstack([segment_points(p.start, p.segment, 64) for p in self.layout()])
         return float(max(np.ptp(pts[0]), np.ptp(pts[1]), 1e-300))
 
+    def merged(self, rel_tol: float = 1e-12) -> "Curve":
+        """The same curve with consecutive pieces of equal curvature joined smoothly made into one.
+
+        Arc fits of drawn circles come in several arcs of one radius; one piece traces faster and
+        the same. Curvatures equal within ``rel_tol`` (relative to the larger) count as equal.
+        """
+        pieces, joins = [self.pieces[0]], []
+        for seg, join in zip(self.pieces[1:], self.joins):
+            last = pieces[-1]
+            same = abs(seg.curvature - last.curvature) <= rel_tol * max(abs(seg.curvature), abs(last.curvature))
+            if not join.is_cusp and same:
+                pieces[-1] = Segment(last.curvature, last.length + seg.length)
+            else:
+                pieces.append(seg)
+                joins.append(join)
+        return Curve(tuple(pieces), tuple(joins), self.repeat, self.closing, self.start, self.name)
+
     def centred_at(self, x: float, y: float) -> "Curve":
         """The same curve moved so that its repetition centre sits at ``(x, y)``."""
         c = self.unit_centre()

@@ -223,13 +223,21 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             continue
         pts = rep.state[3:5, m]
         d_to = np.full(pts.shape[1], np.inf)
-        targets = []
+        d_from = np.zeros(0)
         for p in sec.section.pieces:
             d_to = np.minimum(d_to, distance_to_segment(pts, p.start, p.segment))
             n = max(64, int(p.segment.length * 200))
-            targets.append(segment_points(p.start, p.segment, n))
-        target = np.hstack(targets)
-        d_from = _figure_to_replay(target, rep, m, params)
+            # Each piece's points are matched with the stretch of replay labelled with that piece
+            # (one sample more each side): where two pieces pass close to each other, as at the
+            # waist of a figure eight, the nearest sample may otherwise belong to the other one.
+            own = np.flatnonzero(m & (rep.piece == p.index))
+            if own.size:
+                mp = np.zeros_like(m)
+                mp[max(own[0] - 1, 0):own[-1] + 2] = True
+                mp &= m
+            else:
+                mp = m
+            d_from = np.concatenate([d_from, _figure_to_replay(segment_points(p.start, p.segment, n), rep, mp, params)])
         idx = np.flatnonzero(m)
         speeds = (abs(float(xi2[idx[0]])), abs(float(xi2[idx[-1]])))
         cusp_speeds.extend(speeds)
