@@ -71,7 +71,10 @@ def _size(size) -> tuple[float | None, str | None]:
         return float(size), "model"
     from .inputs import parse_length
 
-    return parse_length(str(size))
+    try:
+        return parse_length(str(size))
+    except SkatetraceError as exc:
+        raise SkatetraceError(f"size: {exc}") from None
 
 
 def _tol(tol, unit: str, size: float) -> float:
@@ -82,7 +85,10 @@ def _tol(tol, unit: str, size: float) -> float:
     else:
         from .inputs import parse_length
 
-        value, tunit = parse_length(str(tol))
+        try:
+            value, tunit = parse_length(str(tol))
+        except SkatetraceError as exc:
+            raise SkatetraceError(f"tolerance: {exc}") from None
         if tunit == "model":
             tunit = unit
     if tunit != unit:

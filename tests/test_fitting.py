@@ -1,0 +1,528 @@
+"""Arc-spline fitting: splitting, biarcs, certified Hausdorff bounds, greedy vs minimum count, figures."""
+
+import importlib.util
+import math
+import warnings
+from pathlib import Path as FsPath
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+from scipy.spatial import cKDTree
+
+from skatetrace import fitting
+from skatetrace.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, Path, piece_length
+from skatetrace.errors import FitError, SkatetraceError
+from skatetrace.fitting import (DrawingFit, FitStatus, PathFit, biarc, figure_from_fit, fit_drawing, fit_path,
+                                split_path)
+from skatetrace.geometry import Pose, Segment, advance, distance_to_segment
+
+BENCH = FsPath(__file__).resolve().parents[1] / "bench"
+TOLS = (1e-2, 1e-3, 1e-4)
+
+
+def sine_piece(analytic=True):
+    if analytic:
+        return FunctionPiece(lambda u: (u, np.sin(u)), 0.0, 2 * math.pi, lambda u: (np.ones_like(u), np.cos(u)),
+                             lambda u: (np.zeros_like(u), -np.sin(u)))
+    return FunctionPiece(lambda u: (u, np.sin(u)), 0.0, 2 * math.pi)
+
+
+def ellipse_quarter():
+    return Path((EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.0, math.pi / 2),), name="ellipse-quarter")
+
+
+def bezier_spiral():
+    # Curvature of one sign, monotone on [0, 1] (checked in test_reference_spirals_are_single_spans).
+    return Path((BezierPiece(((0.0, 0.0), (1.0, 0.0), (2.0, 0.2), (2.8, 0.8))),), name="bezier-spiral")
+
+
+def size_of(path):
+    pts = path.points(513)
+    return float(max(np.ptp(pts[0]), np.ptp(pts[1])))
+
+
+def all_segments(fit):
+    return [(p, s) for r in fit.runs for p, s in zip(r.poses()[:-1], r.segments)]
+
+
+def heading_gap(a, b):
+    return abs(math.remainder(a - b, 2 * math.pi))
+
+
+def quiet_fit(path, tol, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return fit_path(path, tol, **kw)
+
+
+def check_structure(path, fit, *, heading_tol=1e-9):
+    """G1 inside runs (knots on the curve with its tangent), runs meeting end to start, nothing NaN."""
+    size = size_of(path)
+    assert all(math.isfinite(v) for s in (fit.hausdorff, fit.spline_length, fit.curve_length) for v in [s])
+    for r, run in enumerate(fit.runs):
+        assert all(math.isfinite(v) for v in run.start) and run.segments
+        assert all(math.isfinite(k) and L > 0 and math.isfinite(L) for k, L in run.segments)
+        poses = run.poses()
+        has_lines = any(k == 0.0 for k, _ in run.segments)
+        for knot in run.knots:
+            piece = path.pieces[knot.piece]
+            x, y = piece.point(knot.t)[:, 0]
+            p = poses[knot.segment]
+            assert math.hypot(p.x - x, p.y - y) <= max(fit.tol, 1e-9 * size)
+            d1 = piece.d1(knot.t)[:, 0]
+            interior = 1e-6 < knot.t < 1 - 1e-6 and math.hypot(*d1) > 1e-6 * piece_length(piece)
+            if interior and not has_lines:
+                assert math.hypot(p.x - x, p.y - y) <= 1e-9 * size
+                assert heading_gap(p.heading, math.atan2(d1[1], d1[0])) <= heading_tol
+        if r > 0:
+            prev_end = fit.runs[r - 1].poses()[-1]
+            assert math.hypot(prev_end.x - run.start.x, prev_end.y - run.start.y) <= 1e-9 * size
+            assert heading_gap(prev_end.heading + run.corner, run.start.heading) <= 1e-9
+
+
+# ---------------------------------------------------------------- exact cases
+
+
+@pytest.mark.parametrize("dtheta", [math.pi / 2, -2.5, 2 * math.pi])
+def test_exact_circle_is_one_arc_with_zero_error(dtheta):
+    radius = 2.0
+    path = Path((EllipticArcPiece((1.0, -1.0), radius, radius, 0.3, 0.2, dtheta),), closed=abs(dtheta) == 2 * math.pi)
+    for method in ("greedy", "min"):
+        fit = fit_path(path, 1e-4, method=method)
+        assert fit.success and fit.n_arcs == 1 and fit.n_lines == 0
+        (k, L), = fit.runs[0].segments
+        assert k == pytest.approx(math.copysign(1 / radius, dtheta), rel=1e-12)
+        assert L == pytest.approx(radius * abs(dtheta), rel=1e-12)
+        assert fit.hausdorff_sampled <= 1e-12 and fit.hausdorff <= 1e-4
+
+
+@pytest.mark.parametrize("piece", [
+    LinePiece((0.0, 0.0), (3.0, 1.0)),
+    BezierPiece(((0.0, 0.0), (1.0, 1.0), (2.0, 2.0), (3.0, 3.0))),  # collinear control points
+    BezierPiece(((0.0, 0.0), (0.0, 0.0), (2.0, 2.0), (3.0, 3.0))),  # and a zero-length handle
+])
+def test_line_is_one_line(piece):
+    fit = fit_path(Path((piece,)), 1e-3)
+    assert fit.success and fit.n_lines == 1 and fit.n_arcs == 0
+    assert fit.runs[0].segments[0].curvature == 0.0
+    assert fit.runs[0].segments[0].length == pytest.approx(piece_length(piece), rel=1e-12)
+    assert fit.hausdorff <= 1e-6
+
+
+def test_huge_radius_becomes_a_line():
+    # radius 1e6 over a length of 1: the sagitta (1.25e-7) is far below the tolerance
+    path = Path((EllipticArcPiece((0.0, 1e6), 1e6, 1e6, 0.0, -math.pi / 2, 1e-6),))
+    fit = fit_path(path, 1e-4)
+    assert fit.success and (fit.n_arcs, fit.n_lines) == (0, 1)
+    assert fit.hausdorff <= 1e-4
+
+
+# ---------------------------------------------------------------- splitting
+
+
+def test_sine_inflection_and_extrema():
+    for analytic in (True, False):
+        [run] = split_path(Path((sine_piece(analytic),)))
+        u = [s.t0 * 2 * math.pi for s in run.spans[1:]]
+        reasons = [s.reason for s in run.spans]
+        assert reasons == ["start", "extremum", "inflection", "extremum"]
+        assert u == pytest.approx([math.pi / 2, math.pi, 3 * math.pi / 2], abs=1e-8 if analytic else 1e-4)
+        assert [s.kind for s in run.spans] == ["spiral"] * 4
+
+
+def test_reference_spirals_are_single_spans():
+    for path in (ellipse_quarter(), bezier_spiral()):
+        [run] = split_path(path)
+        assert len(run.spans) == 1 and run.spans[0].kind == "spiral" and run.corner is None
+
+
+@pytest.mark.parametrize("p1, angle", [((1.0, 1.0), 90.0), ((1.0, -1.0), -90.0), ((2.0, 1.0), 45.0),
+                                       ((0.0, 1.0), 135.0),
+                                       ((0.0, -0.001), -180.0 + math.degrees(math.atan(0.001)))])
+def test_corner_signed_angle(p1, angle):
+    path = Path((LinePiece((0.0, 0.0), (1.0, 0.0)), LinePiece((1.0, 0.0), p1)))
+    runs = split_path(path)
+    assert [r.corner for r in runs][0] is None
+    assert math.degrees(runs[1].corner) == pytest.approx(angle, abs=1e-6)
+    assert runs[1].spans[0].reason == "corner"
+
+
+def test_cusps_inside_pieces():
+    # A cubic cusp: control polygon crossing itself symmetrically; and an out-and-back quadratic.
+    for piece, n_cusp in [(BezierPiece(((0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0))), 1),
+                          (BezierPiece(((0.0, 0.0), (1.0, 0.0), (0.5, 0.0))), 1)]:
+        runs = split_path(Path((piece,)))
+        assert len(runs) == 1 + n_cusp
+        for r in runs[1:]:
+            assert abs(r.corner) == pytest.approx(math.pi, abs=1e-6)
+            assert r.spans[0].reason == "cusp"
+    # An astroid has four cusps, all true reversals.
+    astroid = Path((FunctionPiece(lambda u: (np.cos(u) ** 3, np.sin(u) ** 3), 0.0, 2 * math.pi),), closed=True)
+    runs = split_path(astroid)
+    assert len(runs) == 4 and all(abs(r.corner) == pytest.approx(math.pi, abs=1e-3) for r in runs)
+
+
+def test_zero_length_handle_joins_smoothly():
+    # The second piece starts with a zero-length handle; its limit tangent continues the first piece.
+    a = BezierPiece(((0.0, 0.0), (1.0, 0.0), (2.0, 1.0), (3.0, 1.0)))
+    b = BezierPiece(((3.0, 1.0), (3.0, 1.0), (4.0, 1.0), (5.0, 0.0)))
+    runs = split_path(Path((a, b)))
+    assert len(runs) == 1
+    assert "join" in [s.reason for s in runs[0].spans]
+    # ... and a small real corner is still a corner.
+    c = BezierPiece(((3.0, 1.0), (3.0, 1.0), (4.0, 1.1), (5.0, 0.0)))
+    runs = split_path(Path((a, c)))
+    assert len(runs) == 2 and math.degrees(runs[1].corner) == pytest.approx(math.degrees(math.atan2(0.1, 1.0)))
+
+
+def test_closed_path_closure():
+    teardrop = Path((BezierPiece(((0.0, 0.0), (2.0, 1.0), (-1.0, 1.0), (0.0, 0.0))),), closed=True)
+    [run] = split_path(teardrop)
+    # leaves along (2, 1), arrives along (1, -1): the travel direction turns left by their difference
+    assert run.corner == pytest.approx(math.atan2(1.0, 2.0) - math.atan2(-1.0, 1.0))
+    ellipse = Path((EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.0, 2 * math.pi),), closed=True)
+    runs = split_path(ellipse)
+    assert len(runs) == 1 and runs[0].corner == 0.0
+    # A closed path with corners elsewhere and a smooth closure: the closure lies inside a run.
+    a = EllipticArcPiece((1.0, 0.0), 1.0, 1.0, 0.0, -math.pi / 2, math.pi)  # right end of a stadium
+    b = LinePiece((1.0, 1.0), (-1.0, 1.0))
+    c = LinePiece((-1.0, 1.0), (-1.0, -1.0))  # corners of +90 degrees at both its ends
+    d = LinePiece((-1.0, -1.0), (1.0, -1.0))  # ... and the path closes smoothly into the arc
+    runs = split_path(Path((a, b, c, d), closed=True))
+    assert [[s.piece for s in r.spans] for r in runs] == [[2], [3, 0, 1]]
+    assert [r.corner for r in runs] == pytest.approx([math.pi / 2, math.pi / 2])
+    assert [s.kind for s in runs[1].spans] == ["line", "arc", "line"]
+
+
+# ---------------------------------------------------------------- biarcs
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-3, 3), min_size=6, max_size=6))
+def test_biarc_interpolates_hermite_data(v):
+    start, end = Pose(v[0], v[1], v[2]), Pose(v[3], v[4], v[5])
+    assume(math.hypot(v[3] - v[0], v[4] - v[1]) > 1e-3)
+    try:
+        segs = biarc(start, end)
+    except FitError:
+        return  # both directions back along the chord: no bounded biarc
+    assert 1 <= len(segs) <= 2 and all(s.length > 0 for s in segs)
+    pose = start
+    for k, L in segs:
+        pose = Pose(*(float(x) for x in advance(pose, k, L)))
+    assert math.hypot(pose.x - end.x, pose.y - end.y) <= 1e-9 * (1 + sum(s.length for s in segs))
+    assert heading_gap(pose.heading, end.heading) <= 1e-9
+
+
+def test_biarc_errors_and_order_three():
+    with pytest.raises(FitError, match="coincide"):
+        biarc(Pose(1.0, 1.0, 0.0), Pose(1.0, 1.0, 1.0))
+    # Meek & Walton: the biarc error on a span of length h of a smooth curve is O(h^3).
+    piece = EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.3, 1.0)
+    errs = []
+    hs = [0.2, 0.1, 0.05, 0.025]
+    for h in hs:
+        t = np.array([0.0, h])
+        p, d = piece.point(t), piece.d1(t)
+        a, b = (Pose(p[0, i], p[1, i], math.atan2(d[1, i], d[0, i])) for i in (0, 1))
+        segs = biarc(a, b)
+        pts = piece.point(np.linspace(0.0, h, 2001))
+        poses = fitting._chain_poses(a, segs)
+        errs.append(float(np.max(np.min([distance_to_segment(pts, q, s) for q, s in zip(poses, segs)], axis=0))))
+    slopes = np.diff(np.log(errs)) / np.diff(np.log(hs))
+    assert np.all((slopes > 2.8) & (slopes < 3.4)) and abs(slopes[-1] - 3) < 0.1, slopes
+
+
+def test_robust_segment_distance():
+    rng = np.random.default_rng(7)
+    pts = rng.normal(size=(2, 500))
+    pose = Pose(0.1, -0.2, 0.7)
+    for k in (0.0, 1.0, -2.0, 0.3, 5.0):
+        seg = Segment(k, 2.5)
+        assert np.allclose(fitting._seg_dist(pts, pose, k, 2.5), distance_to_segment(pts, pose, seg), atol=1e-12)
+    # For a radius of 1e14 the centre-based formula loses every digit; ours matches the line's.
+    far = fitting._seg_dist(pts, pose, 1e-14, 2.5)
+    assert np.allclose(far, fitting._seg_dist(pts, pose, 0.0, 2.5), atol=1e-12)
+
+
+# ---------------------------------------------------------------- certified fits
+
+
+@pytest.mark.parametrize("make", [ellipse_quarter, bezier_spiral])
+def test_certified_bound_and_cubic_order(make):
+    path = make()
+    size = size_of(path)
+    rels = (*TOLS, 1e-5, 1e-6)
+    counts = []
+    for rel in rels:
+        tol = rel * size
+        fit = fit_path(path, tol)
+        assert fit.success and fit.status is FitStatus.SUCCESS
+        assert fit.hausdorff <= tol and fit.hausdorff_sampled <= fit.hausdorff
+        assert fit.hausdorff <= fit.hausdorff_sampled + tol / 8 + 1e-12
+        check_structure(path, fit)
+        assert abs(fit.spline_length - fit.curve_length) <= tol * fit.n_segments
+        counts.append(fit.n_segments)
+    # Meek & Walton: biarc error O(h^3), so n ~ tol^(-1/3). Greedy halving makes counts come in
+    # steps (powers of two per span), hence the band around 1/3 for the fitted log-log slope.
+    slope = np.polyfit(np.log(1 / np.array(rels)), np.log(counts), 1)[0]
+    assert 0.24 <= slope <= 0.42, counts
+
+
+def test_min_never_uses_more_arcs_than_greedy():
+    for path in (ellipse_quarter(), bezier_spiral(), Path((sine_piece(),))):
+        size = size_of(path)
+        for rel in (1e-2, 1e-3):
+            g = fit_path(path, rel * size)
+            m = fit_path(path, rel * size, method="min")
+            assert m.success and m.hausdorff <= rel * size
+            assert m.n_segments <= g.n_segments and m.min_count == m.n_segments
+            assert m.greedy_count == g.n_segments and g.min_count is None
+            check_structure(path, m)
+    # and on this ellipse it finds strictly fewer
+    m = fit_path(ellipse_quarter(), 1e-3, method="min")
+    assert (m.greedy_count, m.min_count) == (10, 8)
+
+
+def test_sine_fit_splits_where_expected():
+    fit = fit_path(Path((sine_piece(),)), 1e-3)
+    assert fit.success and len(fit.runs) == 1
+    ts = [k.t * 2 * math.pi for k in fit.runs[0].knots]
+    for u in (math.pi / 2, math.pi, 3 * math.pi / 2):
+        assert min(abs(t - u) for t in ts) <= 1e-8
+
+
+def brute_force(path, fit, n=100_000):
+    """Curve to spline exactly on n points; spline to curve against n curve points (k-d tree)."""
+    total = path.length()
+    curve = np.hstack([p.point(np.linspace(0.0, 1.0, max(2, int(n * piece_length(p) / total))))
+                       for p in path.pieces])
+    segs = all_segments(fit)
+    a = np.full(curve.shape[1], np.inf)
+    for q, s in segs:
+        a = np.minimum(a, distance_to_segment(curve, q, s))
+    spline = np.hstack([np.vstack(advance(q, s.curvature, np.linspace(0.0, s.length,
+                                                                      max(2, int(n * s.length / fit.spline_length)))
+                                          )[:2]) for q, s in segs])
+    b, _ = cKDTree(curve.T).query(spline.T)
+    spacing = float(np.max(np.hypot(*np.diff(curve, axis=1))))
+    return float(a.max()), float(b.max()), spacing
+
+
+@pytest.mark.parametrize("make, method", [(ellipse_quarter, "greedy"), (bezier_spiral, "min"),
+                                          (lambda: Path((sine_piece(),)), "greedy"),
+                                          (lambda: Path((BezierPiece(((0.0, 0.0), (1.0, 1.0), (0.0, 1.0),
+                                                                      (1.0, 0.0))),)), "min")])
+def test_certificate_is_honest(make, method):
+    path = make()
+    tol = 1e-3 * size_of(path)
+    fit = fit_path(path, tol, method=method)
+    a, b, spacing = brute_force(path, fit)
+    assert fit.hausdorff >= max(a, b - spacing / 2) - 1e-15  # an upper bound ...
+    assert fit.hausdorff <= max(a, b) + tol / 2  # ... and not a loose one
+    assert fit.where is not None and fit.where.distance == fit.hausdorff_sampled
+    piece = path.pieces[fit.where.piece]
+    assert np.allclose(piece.point(fit.where.t)[:, 0], (fit.where.x, fit.where.y))
+
+
+# ---------------------------------------------------------------- figures
+
+
+def figure_path():
+    """Open path with a smooth stretch, a corner below the reversal threshold and a true cusp."""
+    return Path((
+        BezierPiece(((0.0, 0.0), (1.0, 0.0), (2.0, 1.0), (3.0, 1.0))),
+        BezierPiece(((3.0, 1.0), (4.0, 1.0), (4.0, 2.0), (3.5, 2.5))),  # smooth continuation
+        LinePiece((3.5, 2.5), (2.5, 2.5)),  # corner of 45 degrees
+        BezierPiece(((2.5, 2.5), (1.5, 2.5), (2.5, 3.5), (1.5, 2.5))),  # contains a cusp
+    ), name="mixed")
+
+
+@pytest.mark.parametrize("path", [
+    figure_path(),
+    Path((BezierPiece(((0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0))),
+          BezierPiece(((1.0, 0.0), (2.0, -1.0), (1.0, -1.0), (0.0, 0.0)))), closed=True, name="closed-cusps"),
+    Path((EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.4, 0.0, 2 * math.pi),), closed=True, name="ellipse"),
+])
+def test_figure_layout_reproduces_fit(path):
+    fit = fit_path(path, 1e-3 * size_of(path))
+    fig = figure_from_fit(fit, name="fitted")
+    [curve] = fig.curves
+    size = size_of(path)
+    poses = [q for r in fit.runs for q in r.poses()[:-1]]
+    placed = curve.layout()
+    assert len(placed) == len(poses) == fit.n_segments
+    for pl, q, (seg) in zip(placed, poses, [s for r in fit.runs for s in r.segments]):
+        assert pl.segment == seg
+        assert math.hypot(pl.start.x - q.x, pl.start.y - q.y) <= 1e-9 * size
+        assert heading_gap(pl.start.heading, q.heading) <= 1e-9
+    end, _ = curve.end_pose()
+    last = fit.runs[-1].poses()[-1]
+    if not path.closed:
+        assert math.hypot(end.x - last.x, end.y - last.y) <= 1e-9 * size
+    else:
+        assert curve.closure()["position_gap"] <= 1e-9 * size
+        assert curve.closure()["closed"] or abs(curve.closure()["heading_gap"]) <= 1e-9
+    # joins: smooth inside runs, one cusp per corner; reversal above 90 degrees only
+    cusps = [j for j in curve.joins if j.is_cusp]
+    assert len(cusps) == len(fit.runs) - 1
+    for run, j in zip(fit.runs[1:], cusps):
+        assert j.reverse == (abs(run.corner) > math.pi / 2)
+        turn = j.pivot + (math.pi if j.reverse else 0.0)
+        assert heading_gap(turn, run.corner) <= 1e-12
+    assert fig.provenance.startswith("arc-spline fit")
+
+
+def test_figure_from_drawing_and_reverse_threshold():
+    vee = Path((LinePiece((0.0, 0.0), (1.0, 0.0)), LinePiece((1.0, 0.0), (0.0, 0.5))), name="vee")
+    ell = Path((EllipticArcPiece((5.0, 0.0), 2.0, 1.0, 0.0, 0.0, math.pi),), name="arc")
+    dfit = fit_drawing(Drawing((vee, ell)), 1e-3)
+    assert isinstance(dfit, DrawingFit) and dfit.success and len(dfit.paths) == 2
+    assert dfit.n_arcs == sum(p.n_arcs for p in dfit.paths) and dfit.hausdorff <= 1e-3
+    fig = figure_from_fit(dfit, name="two", reverse_above_deg=170.0)
+    assert [c.name for c in fig.curves] == ["vee", "arc"]
+    j = fig.curves[0].joins[0]
+    assert not j.reverse and math.degrees(j.pivot) == pytest.approx(180 - math.degrees(math.atan2(0.5, 1.0)))
+
+
+# ---------------------------------------------------------------- errors and robustness
+
+
+@pytest.mark.parametrize("args, kw, match", [
+    ((Path((LinePiece((0.0, 0.0), (1.0, 0.0)),)), 0.0), {}, "tol must be a positive"),
+    ((Path((LinePiece((0.0, 0.0), (1.0, 0.0)),)), math.nan), {}, "tol must be a positive"),
+    ((Path((LinePiece((0.0, 0.0), (1.0, 0.0)),)), 1e-3), {"method": "best"}, "method must be"),
+    ((Path((LinePiece((0.0, 0.0), (1.0, 0.0)),)), 1e-3), {"corner_tol_deg": -1.0}, "corner_tol_deg"),
+    ((Path((LinePiece((0.0, 0.0), (1.0, 0.0)), LinePiece((1.1, 0.0), (2.0, 0.0)))), 1e-3), {}, "gap of 0.1"),
+    ((Path((LinePiece((0.0, 0.0), (1.0, 0.0)),), closed=True), 1e-3), {}, "where the path closes"),
+    ((Path((BezierPiece(((1.0, 1.0),) * 4),)), 1e-3), {}, "zero extent"),
+    ((Path((FunctionPiece(lambda u: (u, np.sqrt(u - 0.5))),)), 1e-3), {}, "not finite"),
+    (("not a path", 1e-3), {}, "expected a skatetrace.curves.Path"),
+])
+def test_errors(args, kw, match):
+    with np.errstate(all="ignore"), pytest.raises(FitError, match=match) as info:
+        fit_path(*args, **kw)
+    assert isinstance(info.value, SkatetraceError)
+
+
+def test_failure_is_data(monkeypatch):
+    monkeypatch.setattr(fitting, "MIN_SPAN", 0.3)  # spans may not be halved below 0.3 of the size
+    with pytest.warns(RuntimeWarning, match="minimum span length"):
+        fit = fit_path(bezier_spiral(), 1e-6)
+    assert not fit.success and fit.status is FitStatus.SUBDIVISION_LIMIT
+    assert "piece 0" in fit.message and fit.hausdorff > 1e-6 and math.isfinite(fit.hausdorff)
+    with pytest.raises(FitError, match="failed fit"):
+        figure_from_fit(fit, name="x")
+    monkeypatch.setattr(fitting, "MIN_SPAN", 1e-9)
+    monkeypatch.setattr(fitting, "MAX_INTERVALS", 3)
+    with pytest.warns(RuntimeWarning, match="more biarcs than the limit"):
+        fit = fit_path(bezier_spiral(), 1e-6)
+    assert not fit.success and fit.status is FitStatus.TOO_MANY_ARCS
+
+
+coord = st.floats(-2.0, 2.0, allow_nan=False).map(lambda v: round(v, 1))
+
+
+bezier_points = st.lists(st.tuples(st.floats(-1, 1), st.floats(-1, 1)), min_size=4, max_size=4)
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(bezier_points, st.sampled_from([3e-3, 1e-3]))
+def test_random_beziers(pts, rel):
+    path = Path((BezierPiece(tuple(pts)),))
+    assume(path.length() > 1e-2)
+    tol = rel * size_of(path)
+    fit = quiet_fit(path, tol)
+    assert fit.success, fit.message
+    assert fit.hausdorff <= tol
+    check_structure(path, fit, heading_tol=1e-7)
+    assert abs(fit.spline_length - fit.curve_length) <= 2 * tol * fit.n_segments + 1e-9 * fit.curve_length
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(bezier_points)
+def test_random_beziers_min_count(pts):
+    path = Path((BezierPiece(tuple(pts)),))
+    assume(path.length() > 1e-2)
+    tol = 3e-3 * size_of(path)
+    fit = quiet_fit(path, tol, method="min")
+    assert fit.success and fit.hausdorff <= tol
+    assert fit.min_count == fit.n_segments <= fit.greedy_count
+    check_structure(path, fit, heading_tol=1e-7)
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.floats(-1, 1), min_size=6, max_size=6), st.lists(st.floats(0, 6.3), min_size=6, max_size=6),
+       st.booleans(), st.floats(1.0, 6.0))
+def test_random_sums_of_sinusoids(amp, phase, analytic, span):
+    def fn(u):
+        x = sum(amp[i] * np.cos((i + 1) * u + phase[i]) for i in range(3))
+        y = sum(amp[i + 3] * np.sin((i + 1) * u + phase[i + 3]) for i in range(3))
+        return x, y
+
+    def dfn(u):
+        x = sum(-(i + 1) * amp[i] * np.sin((i + 1) * u + phase[i]) for i in range(3))
+        y = sum((i + 1) * amp[i + 3] * np.cos((i + 1) * u + phase[i + 3]) for i in range(3))
+        return x, y
+
+    def d2fn(u):
+        x = sum(-(i + 1) ** 2 * amp[i] * np.cos((i + 1) * u + phase[i]) for i in range(3))
+        y = sum(-(i + 1) ** 2 * amp[i + 3] * np.sin((i + 1) * u + phase[i + 3]) for i in range(3))
+        return x, y
+
+    piece = FunctionPiece(fn, 0.0, span, dfn if analytic else None, d2fn if analytic else None)
+    path = Path((piece,))
+    assume(path.length() > 0.05 and size_of(path) > 0.02)
+    tol = 2e-3 * size_of(path)
+    try:
+        fit = quiet_fit(path, tol)
+    except FitError:
+        return  # a curve folding back on itself within rounding can be refused with a message
+    assert fit.success, fit.message
+    assert fit.hausdorff <= tol
+    check_structure(path, fit, heading_tol=1e-6)
+    assert abs(fit.spline_length - fit.curve_length) <= 2 * tol * fit.n_segments + 1e-9 * fit.curve_length
+
+
+@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.lists(st.tuples(coord, coord), min_size=2, max_size=4), min_size=1, max_size=3),
+       st.booleans(), st.sampled_from([1.0, 1e-6, 1e6]), st.sampled_from(["greedy", "greedy", "greedy", "min"]))
+def test_degenerate_input_never_nan_or_crash(polys, closed, scale, method):
+    """Repeated, collinear and coincident control points at any scale: a result or a FitError."""
+    pieces = []
+    prev = None
+    for ctrl in polys:
+        ctrl = [(x * scale, y * scale) for x, y in ctrl]
+        if prev is not None:
+            ctrl[0] = prev  # pieces meet end to start
+        pieces.append(BezierPiece(tuple(ctrl)))
+        prev = ctrl[-1]
+    path = Path(tuple(pieces), closed=closed)
+    try:
+        fit = quiet_fit(path, 1e-2 * scale, method=method)
+    except SkatetraceError:
+        return
+    vals = [fit.hausdorff, fit.spline_length, fit.curve_length]
+    vals += [v for r in fit.runs for s in r.segments for v in s] + [v for r in fit.runs for v in r.start]
+    assert all(math.isfinite(v) for v in vals)
+    assert isinstance(fit, PathFit) and (fit.success or fit.message)
+    if fit.success:
+        assert fit.hausdorff <= 1e-2 * scale
+
+
+# ---------------------------------------------------------------- bench
+
+
+def test_bench_fit_quick(capsys):
+    spec = importlib.util.spec_from_file_location("bench_fit", BENCH / "bench_fit.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    rows = mod.main(["--quick"])
+    assert len(rows) == 1
+    r = rows[0]
+    assert r["greedy_success"] and r["min_success"]
+    assert r["min_segments"] <= r["greedy_segments"]
+    assert r["greedy_bound"] <= r["tol"] and r["min_bound"] <= r["tol"]
+    assert "min/greedy" in capsys.readouterr().out

@@ -1,0 +1,115 @@
+"""From names, files and drawings to figures (`skatetrace.sources`), and the `fit` command."""
+
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from skatetrace.cli import main  # noqa: E402
+from skatetrace.errors import SkatetraceError  # noqa: E402
+from skatetrace.geometry import advance  # noqa: E402
+from skatetrace.sources import resolve  # noqa: E402
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_builtin_and_json(tmp_path):
+    r = resolve("double-flower")
+    assert r.kind == "pattern" and r.unit == "model" and r.fit is None
+    path = tmp_path / "fig.json"
+    path.write_text(json.dumps(r.figure.to_dict()))
+    assert resolve(str(path)).kind == "json"
+
+
+def test_school_is_in_metres_with_the_si_skater():
+    r = resolve("school:three", height=1.8, body_mass=70.0)
+    assert r.kind == "school" and r.unit == "m"
+    assert r.figure.params.M + r.figure.params.m == pytest.approx(70.0)
+    assert 5.5 * 1.8 < r.figure.size() < 6.5 * 1.8  # two circles, each about three heights across
+
+
+def test_svg_scaled_and_fitted_within_tolerance():
+    r = resolve(str(EXAMPLES / "figure-eight.svg"), size="6m", tol="1mm")
+    assert r.kind == "drawing" and r.unit == "m" and r.tol == pytest.approx(1e-3)
+    assert r.drawing.size() == pytest.approx(6.0, rel=1e-9)
+    assert r.fit.success and r.fit.hausdorff <= 1e-3
+    # the circles of the eight come out as one arc each after merging equal curvatures
+    curve = r.figure.curves[0]
+    assert len(curve.pieces) == 2 and curve.pieces[0].curvature == pytest.approx(-curve.pieces[1].curvature)
+    assert curve.closure()["closed"]
+
+
+def test_merged_curve_lays_out_like_the_fit():
+    r = resolve(str(EXAMPLES / "serpentine.svg"), size="8m", tol="2mm")
+    for curve, pf in zip(r.figure.curves, r.fit.paths):
+        lay = curve.layout()
+        end = lay[-1]
+        x, y, _ = advance(end.start, end.segment.curvature, end.segment.length)
+        fitted_end = pf.runs[-1].poses()[-1]
+        assert np.hypot(float(x) - fitted_end.x, float(y) - fitted_end.y) <= 1e-9 * r.drawing.size()
+
+
+def test_default_tolerance_is_relative_to_size():
+    r = resolve(str(EXAMPLES / "points-eight.csv"))
+    assert r.unit == "model"
+    assert r.tol == pytest.approx(1e-3 * r.drawing.size())
+
+
+@pytest.mark.parametrize("kw, needle", [
+    ({"size": "6m", "tol": "1e-3"}, None),      # a bare tolerance takes the figure's unit
+    ({"size": "6", "tol": "1mm"}, "in m but the figure is in model units"),
+    ({"size": "-3m"}, "size"),
+    ({"size": "6m", "tol": "0"}, "tolerance"),
+])
+def test_size_and_tolerance_units(kw, needle):
+    spec = str(EXAMPLES / "figure-eight.svg")
+    if needle is None:
+        assert resolve(spec, **kw).tol == pytest.approx(1e-3)
+    else:
+        with pytest.raises(SkatetraceError, match=needle):
+            resolve(spec, **kw)
+
+
+def test_unknown_names_say_what_is_accepted():
+    with pytest.raises(SkatetraceError, match="school:NAME"):
+        resolve("no-such-figure")
+    with pytest.raises(SkatetraceError, match="valid names"):
+        resolve("school:no-such-figure")
+
+
+def test_cli_fit_writes_summary_and_plot(tmp_path, capsys):
+    out = tmp_path / "fit"
+    code = main(["fit", str(EXAMPLES / "serpentine.svg"), "--size", "8m", "--tol", "2mm", "--fit", "min",
+                 "--out", str(out)])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    data = json.loads((out / "fit.json").read_text())
+    assert data["schema"] == "skatetrace.fit/1" and data["unit"] == "m"
+    assert data["hausdorff_certified"] <= 2e-3
+    for p in data["paths"]:
+        assert p["min_count"] is not None and p["min_count"] <= p["greedy_count"]
+    assert (out / "fit.png").stat().st_size > 5000
+    assert "certified Hausdorff distance" in text
+
+
+def test_cli_fit_refuses_an_exact_figure(tmp_path, capsys):
+    assert main(["fit", "double-flower", "--out", str(tmp_path)]) == 2
+    assert "not a drawing" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_traces_an_svg_end_to_end(tmp_path, capsys):
+    out = tmp_path / "t"
+    code = main(["trace", str(EXAMPLES / "figure-eight.svg"), "--size", "6m", "--tol", "1mm", "--out", str(out),
+                 "--no-plots"])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    rep = json.loads((out / "report.json").read_text())
+    fit = json.loads((out / "fit.json").read_text())
+    assert rep["success"] and rep["max_deviation"] <= 1e-6 * rep["figure_size"]
+    assert fit["hausdorff_certified"] + rep["max_deviation"] <= 1e-3 + 1e-6 * rep["figure_size"]
