@@ -331,13 +331,20 @@ def test_certificate_is_honest(make, method):
 
 
 def figure_path():
-    """Open path with a smooth stretch, a corner below the reversal threshold and a true cusp."""
+    """Open path: a smooth join, corners of +45 and -45 degrees, then a true cusp inside a piece."""
     return Path((
         BezierPiece(((0.0, 0.0), (1.0, 0.0), (2.0, 1.0), (3.0, 1.0))),
         BezierPiece(((3.0, 1.0), (4.0, 1.0), (4.0, 2.0), (3.5, 2.5))),  # smooth continuation
-        LinePiece((3.5, 2.5), (2.5, 2.5)),  # corner of 45 degrees
-        BezierPiece(((2.5, 2.5), (1.5, 2.5), (2.5, 3.5), (1.5, 2.5))),  # contains a cusp
+        LinePiece((3.5, 2.5), (2.5, 2.5)),  # corner of +45 degrees
+        BezierPiece(((2.5, 2.5), (1.5, 3.5), (2.5, 3.5), (1.5, 2.5))),  # -45 degrees, then a cusp
     ), name="mixed")
+
+
+def test_figure_path_has_what_it_says():
+    runs = split_path(figure_path())
+    assert [round(math.degrees(r.corner), 6) if r.corner is not None else None for r in runs] == [
+        None, 45.0, -45.0, 180.0]
+    assert [r.spans[0].reason for r in runs] == ["start", "corner", "corner", "cusp"]
 
 
 @pytest.mark.parametrize("path", [
@@ -420,6 +427,13 @@ def test_failure_is_data(monkeypatch):
     with pytest.warns(RuntimeWarning, match="more biarcs than the limit"):
         fit = fit_path(bezier_spiral(), 1e-6)
     assert not fit.success and fit.status is FitStatus.TOO_MANY_ARCS
+
+
+def test_min_count_search_has_a_budget(monkeypatch):
+    monkeypatch.setattr(fitting, "MIN_BUDGET", 1)
+    fit = fit_path(ellipse_quarter(), 1e-4, method="min")
+    assert fit.success and fit.n_segments == fit.greedy_count == fit.min_count
+    assert "stopped at its budget; kept greedy's" in fit.message
 
 
 coord = st.floats(-2.0, 2.0, allow_nan=False).map(lambda v: round(v, 1))

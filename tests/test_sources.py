@@ -102,14 +102,17 @@ def test_cli_fit_refuses_an_exact_figure(tmp_path, capsys):
     assert "not a drawing" in capsys.readouterr().err
 
 
-@pytest.mark.slow
-def test_cli_traces_an_svg_end_to_end(tmp_path, capsys):
+def test_cli_traces_a_drawing_end_to_end(tmp_path, capsys):
+    # An SVG circle in model units: read, scaled, fitted, merged to one arc, traced, replayed.
+    svg = tmp_path / "circle.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                   '<circle cx="50" cy="50" r="40"/></svg>')
     out = tmp_path / "t"
-    code = main(["trace", str(EXAMPLES / "figure-eight.svg"), "--size", "6m", "--tol", "1mm", "--out", str(out),
-                 "--no-plots"])
+    code = main(["trace", str(svg), "--size", "4", "--tol", "1e-3", "--out", str(out), "--no-plots"])
     text = capsys.readouterr().out
     assert code == 0, text
     rep = json.loads((out / "report.json").read_text())
     fit = json.loads((out / "fit.json").read_text())
     assert rep["success"] and rep["max_deviation"] <= 1e-6 * rep["figure_size"]
     assert fit["hausdorff_certified"] + rep["max_deviation"] <= 1e-3 + 1e-6 * rep["figure_size"]
+    assert len(fit["figure"]["curves"][0]["pieces"]) == 1

@@ -22,10 +22,11 @@ Notation: kappa is signed curvature (positive turns left), s arc length, t a pie
 
 References
 ----------
-D. S. Meek, D. J. Walton, "Approximation of discrete data by G1 arc splines", Computer-Aided Design 24
-(1992) 301-306; "Approximating smooth planar curves by arc splines", J. Comput. Appl. Math. 59 (1995)
-221-231. R. L. S. Drysdale, G. Rote, A. Sturm, "Approximation of an open polygonal curve with a minimum
-number of circular arcs and biarcs", Comput. Geom. 41 (2008) 31-47.
+D. S. Meek, D. J. Walton, "Approximation of discrete data by G1 arc splines", Computer-Aided Design
+(1992); "Approximating smooth planar curves by arc splines", J. Comput. Appl. Math. 59 (1995) 221-231;
+"Spiral arc spline approximation to a planar spiral", J. Comput. Appl. Math. 107 (1999) 21-30 (ways
+of choosing a biarc's free parameter). R. L. S. Drysdale, G. Rote, A. Sturm, "Approximation of an open
+polygonal curve with a minimum number of circular arcs and biarcs", Comput. Geom. Theory Appl. (2008).
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ CUSP_RADIUS = 1e-10  # a speed minimum whose radius bound |r'|^2/|r''| is below 
 SPLIT_MIN = 1e-6  # inflections/extrema closer than this (fraction of the range) to an end or each other merge
 MAX_INTERVALS = 100_000  # biarcs per path before the fit gives up
 MIN_DENSITY = 6  # candidate breakpoints per greedy biarc for the minimum-count fit
+MIN_BUDGET = 30  # certificates per greedy biarc the minimum-count search may spend before keeping greedy's
 
 _GL5 = np.polynomial.legendre.leggauss(5)
 _TWO_PI = 2.0 * math.pi
@@ -255,30 +257,42 @@ def _refine_extremum(piece: Piece, lo: float, hi: float, h: float, rising: bool,
 
 def _spiral_spans(piece: Piece, index: int, a: float, b: float, h0: float, h1: float, reason: str,
                   length: float) -> list[Span]:
-    """Cut ``piece`` on ``[a, b]`` at inflections and curvature extrema."""
+    """Cut ``piece`` on ``[a, b]`` at inflections and curvature extrema.
+
+    Curvature is only trusted to within its rounding error at each grid point: derivatives carry an
+    absolute error ``eta * (|r| + L)`` (``eta`` 1e-13, or 1e-7 for finite differences), which the
+    cross product and ``|r'|^3`` turn into ``nk``, large where ``|r'|`` is small (near a cusp, or on a
+    straight stretch where ``r'`` and ``r''`` are parallel). Curvature within ``nk`` of zero, and
+    differences within their combined ``nk``, count as zero; a stretch is of constant curvature when
+    all intervals ``kappa +- nk`` share a value (to 1e-9 relative).
+    """
     t = np.linspace(a, b, 513)
-    k = curvature(piece, t)
-    fin = np.isfinite(k)
-    tf, kf = t[fin], k[fin]
+    p, d1, d2 = piece.point(t), piece.d1(t), piece.d2(t)
+    sp, n2 = np.hypot(d1[0], d1[1]), np.hypot(d2[0], d2[1])
+    nd = (1e-7 if _noisy(piece) else 1e-13) * (float(np.max(np.abs(p))) + length)
+    with np.errstate(all="ignore"):
+        k = (d1[0] * d2[1] - d1[1] * d2[0]) / sp ** 3
+        nk = nd * (sp + n2) / sp ** 3 + 3.0 * np.abs(k) * nd / sp
+    fin = np.isfinite(k) & np.isfinite(nk) & (sp > 0)
+    tf, kf, nkf = t[fin], k[fin], nk[fin]
     if kf.size < 8:
         return [Span(index, a, b, h0, h1, "spiral", reason)]
-    kmax = float(np.max(np.abs(kf)))
-    if float(np.ptp(kf)) <= 1e-9 * max(kmax, 1.0 / length):
-        kind = "line" if kmax * length <= 1e-9 else "arc"
-        return [Span(index, a, b, h0, h1, kind, reason)]
-    noise = kmax * (1e-6 if _noisy(piece) else 1e-10)
+    scale_k = max(float(np.median(np.abs(kf))), 1.0 / length)
+    if float(np.max(kf - nkf)) <= float(np.min(kf + nkf)) + 1e-9 * scale_k:
+        straight = float(np.max(np.maximum(np.abs(kf) - nkf, 0.0))) * length <= 1e-9
+        return [Span(index, a, b, h0, h1, "line" if straight else "arc", reason)]
     roots: list[tuple[float, str]] = []
-    for lo, hi in _sign_changes(tf, kf, noise):
+    kz = np.where(np.abs(kf) <= nkf, 0.0, kf)
+    for lo, hi in _sign_changes(tf, kz, 0.0):
         roots.append((_refine_inflection(piece, lo, hi), "inflection"))
     dk = np.diff(kf)
+    dk = np.where(np.abs(dk) <= nkf[:-1] + nkf[1:], 0.0, dk)
     mid = 0.5 * (tf[:-1] + tf[1:])
     h = 1e-5 * (b - a)
-    for lo, hi in _sign_changes(mid, dk, 2 * noise):
+    for lo, hi in _sign_changes(mid, dk, 0.0):
         rising = float(np.interp(lo, mid, dk)) > 0
         roots.append((_refine_extremum(piece, lo, hi, h, rising, a, b), "extremum"))
     # Arc length along the grid, to drop splits within rounding of an end or of each other.
-    d = piece.d1(t)
-    sp = np.hypot(d[0], d[1])
     s = np.concatenate([[0.0], np.cumsum(0.5 * (sp[1:] + sp[:-1]) * np.diff(t))])
     total = float(s[-1]) if s[-1] > 0 else 1.0
     dt, ds = SPLIT_MIN * (b - a), SPLIT_MIN * total
@@ -452,9 +466,9 @@ def split_path(path: Path, *, corner_tol_deg: float = 0.5) -> list[Run]:
     cusp when ``|r'|^2 / |r''|`` (a lower bound of the radius of curvature there) is below
     ``CUSP_RADIUS`` times the size. Its two sides have limit directions ``-r''`` and ``+r''``, so a true
     cusp turns by about ``pi``. Spiral spans: sign changes of kappa and of its grid differences on 513
-    points per stretch, refined by brentq (on kappa, and on a central difference of kappa, with a
-    bounded minimisation of kappa as fall-back); splits within ``SPLIT_MIN`` of an end or of each
-    other are dropped.
+    points per stretch, ignoring values within their rounding error (see :func:`_spiral_spans`),
+    refined by brentq (on kappa, and on a central difference of kappa, with a bounded minimisation
+    of kappa as fall-back); splits within ``SPLIT_MIN`` of an end or of each other are dropped.
 
     Examples
     --------
@@ -1018,6 +1032,7 @@ class _Fitter:
         self.slack = tol / 8.0
         self.budget = _Budget()
         self.failures: list[str] = []
+        self.notes: list[str] = []
 
     def certify(self, geom: _RunGeom, a: _Loc, b: _Loc, pose: Pose, segs, tight: bool = True) -> _Cert:
         """Certificate within ``tol``; ``tight`` refines until the bound is within ``tol/8`` of the samples."""
@@ -1050,7 +1065,7 @@ class _Fitter:
         k = 0.0
         if sp.kind == "arc":
             kk = curvature(piece, np.linspace(sp.t0, sp.t1, 33))
-            k = float(np.mean(kk[np.isfinite(kk)])) if np.any(np.isfinite(kk)) else 0.0
+            k = float(np.median(kk[np.isfinite(kk)])) if np.any(np.isfinite(kk)) else 0.0
         d = math.hypot(p1.x - p0.x, p1.y - p0.y)
         if abs(k) * L < 1.5 * math.pi and d > 0:
             half = _wrap(math.atan2(p1.y - p0.y, p1.x - p0.x) - p0.heading)
@@ -1137,8 +1152,12 @@ class _Fitter:
             cache[(keep_g[g], keep_g[g + 1])] = iv
         data = [geom.data(c) for c in cand]
 
+        budget = self.budget.certificates + MIN_BUDGET * len(greedy) + 100
+
         def feasible(i: int, j: int) -> bool:
             if (i, j) not in cache:
+                if self.budget.certificates > budget:
+                    raise _OverBudget()
                 if not geom.window(cand[i], cand[j]):
                     return False
                 segs = _biarc(*data[i], *data[j])
@@ -1148,6 +1167,15 @@ class _Fitter:
                 loose.add((i, j))
             return cache[(i, j)].cert.ok
 
+        try:
+            return self._shortest(geom, greedy, cand, data, cache, loose, feasible)
+        except _OverBudget:
+            self.notes.append(f"minimum-count search over {m} candidates stopped at its budget; kept greedy's")
+            return greedy
+
+    def _shortest(self, geom, greedy, cand, data, cache, loose, feasible) -> list[_Interval]:
+        """Reach of each candidate (two-pointer sweep), then the shortest certified path (see :meth:`minimum`)."""
+        m = len(cand)
         reach = list(range(m))
         j = 1
         for i in range(m - 1):
@@ -1282,6 +1310,10 @@ class _Fitter:
 
 
 class _TooMany(Exception):
+    pass
+
+
+class _OverBudget(Exception):
     pass
 
 
@@ -1571,6 +1603,7 @@ def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str
     success = hausdorff <= tol and not fitter.failures
     if success:
         message = f"{len(segs)} segments in {len(fitted)} runs, Hausdorff distance <= {hausdorff:.3g} (tol {tol:.3g})"
+        message += "".join(f"; {note}" for note in fitter.notes)
     else:
         status = FitStatus.SUBDIVISION_LIMIT
         message = f"path {path.name!r}: {status.value}: " + "; ".join(fitter.failures[:3] or [
