@@ -198,7 +198,7 @@ def evaluate_paper_arc(row: PaperRow, values, label: str, *, params: SleighParam
     """All yardsticks for the paper's method with control parameters ``values`` on ``row``."""
     control = control_from_params(row.method, values)
     arc = integrate_reduced(params, row.radius, row.initial, control, row.T, options)
-    cost = _cost_of(row, arc, 2.0) if row.method != "point" else _cost_of(row, _forward_only(arc), 2.0)
+    cost = _cost_of(row, arc, 2.0)  # the point cost reads the forward half only
     if row.method == "point":
         miss = math.hypot(arc.forward.state[2, -1] - row.target_point[0], arc.forward.state[3, -1] - row.target_point[1])
     else:
@@ -231,11 +231,6 @@ def evaluate_paper_arc(row: PaperRow, values, label: str, *, params: SleighParam
         min_dist_singular_point=sd[2], peak_mass_energy=_finite_max(ke_m), peak_skate_energy=_finite_max(ke_s),
         full_success=bool(full["success"]), seconds=seconds, notes=tuple(notes), series=s, full=full,
     )
-
-
-def _forward_only(arc: ReducedArc) -> ReducedArc:
-    return ReducedArc(params=arc.params, radius=arc.radius, invariant=arc.invariant, control=arc.control,
-                      options=arc.options, forward=arc.forward, backward=None)
 
 
 def _finite_max(v) -> float:
@@ -277,10 +272,11 @@ def evaluate_exact_arc(row: PaperRow, *, params: SleighParams = SleighParams(),
             "theta": rep.state[2]}
     X, L = _target(row, start)
     C = deviation_cost(np.vstack([rep.state[3], rep.state[4]]), X, L).value
-    cost = (row.exact_length - sec.length) ** 2 if row.method != "point" else 0.0
     if row.method == "point":
         end = sec.evaluate([sec.duration])
         cost = float((end["x"][0] - row.target_point[0]) ** 2 + (end["y"][0] - row.target_point[1]) ** 2) ** 2
+    else:
+        cost = (row.exact_length - sec.length) ** 2
     sd = singular_distances(params, row.radius, s["a"], s["b"])
     ke_m = mass_energy(params, s["xi1"], s["xi2"], s["a"], s["b"], s["adot"], s["bdot"])
     ke_s = skate_energy(params, s["xi1"], s["xi2"])
