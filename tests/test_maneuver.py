@@ -1,5 +1,7 @@
 """The manoeuvre solver's inlined right-hand side against the model's own formulas."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -41,3 +43,28 @@ def test_stop_reports_failure_as_data_at_the_singular_point():
     k = 1.0
     res = solve_stop(p, [(k, 1.0)], (0.0, -k * p.I / p.M), 1.0)
     assert not res.success and "singular" in res.message
+
+
+def test_polish_rejects_a_duration_of_the_wrong_sign(monkeypatch):
+    # Newton's method may land on a root whose duration has the other sign (the manoeuvre would run
+    # backwards in time: a stop before its glide). Seen on the change-loop school figure, where it
+    # gave a section of negative duration; such a root must be refused, not assembled. Here every
+    # candidate meets the boundary conditions, so only the sign of the duration can reject it.
+    from types import SimpleNamespace
+
+    from skatetrace import maneuver
+    from skatetrace.model import SleighParams
+
+    length = 1.0
+    monkeypatch.setattr(maneuver, "root", lambda *a, **k: SimpleNamespace(x=np.array([1.0, -0.5])))
+    monkeypatch.setattr(maneuver, "_integrate", lambda params, y0, legs_spec, u, tau, **kw: (
+        [None] * len(legs_spec), 0, tau, np.array([0.0, 0.0, 0.0, 0.0, length]), None))
+    monkeypatch.setattr(maneuver, "_end_speed", lambda *a: 0.0)
+    params = SleighParams()
+    y0 = np.zeros(5)
+    sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12)
+    assert sol is None and res is None
+    # the same root with a positive duration is accepted
+    monkeypatch.setattr(maneuver, "root", lambda *a, **k: SimpleNamespace(x=np.array([1.0, 0.5])))
+    sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12)
+    assert sol == pytest.approx((0.3, 1.0)) and res == {"end_speed": 0.0, "length": 0.0}

@@ -374,6 +374,10 @@ def _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol,
         return np.array([v / speed, (abs(yf[4]) - length) / length])
 
     out = root(residual, [1.0, 1.0], method="hybr", options={"xtol": 1e-14})
+    if not out.x[1] > 0.0:
+        # A duration of the other sign runs the manoeuvre the wrong way in time (a stop before its
+        # glide, a launch after it): the residuals may vanish there, but it is no manoeuvre.
+        return None, None, count
     res = residual(out.x)
     if not np.all(np.abs(res) < 1e-11):
         return None, None, count
