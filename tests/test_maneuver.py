@@ -1,11 +1,12 @@
-"""The manoeuvre solver's inlined right-hand side against the model's own formulas."""
+"""The manoeuvre solver: its compiled right-hand side against the model's formulas, and its solves."""
 
 import math
 
 import numpy as np
 import pytest
 
-from skatetrace.maneuver import _rhs_factory, constrained_rates, solve_stop
+from skatetrace.integrator import _rhs
+from skatetrace.maneuver import constrained_rates, solve_stop
 from skatetrace.model import SleighParams, curvature_coefficients, rhs, velocities
 
 
@@ -14,8 +15,9 @@ def test_inlined_rhs_matches_model(params):
     rng = np.random.default_rng(3)
     for _ in range(20):
         p1, p2, a, b, kappa, u = rng.normal(size=6)
-        f = _rhs_factory(params, kappa, lambda t: u)
-        dp1, dp2, da, db, ds = f(0.0, [p1, p2, a, b, 0.0])
+        out = np.empty(5)
+        assert _rhs(params.M, params.m, params.I, kappa, u, 1.0, np.array([p1, p2, a, b, 0.0]), out)  # u = alpha t at t = 1
+        dp1, dp2, da, db, ds = out
         ad, bd, _ = constrained_rates(params, kappa, p1, p2, a, b, u)
         ref = rhs(params, np.array([p1, p2, 0.0, 0.0, 0.0]), a, b, ad, bd)
         xi1, xi2, _ = velocities(params, p1, p2, a, b, ad, bd)

@@ -29,9 +29,9 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
+from .integrator import integrate_legs
 from .model import SleighParams, curvature_coefficients, velocities
 
 __all__ = ["Leg", "ManeuverSolution", "glide_state", "constrained_rates", "solve_stop"]
@@ -44,7 +44,7 @@ class Leg:
     kappa: float
     t0: float
     t1: float
-    sol: object  # scipy OdeSolution of (p1, p2, a, b, s)
+    sol: object  # DenseSolution of (p1, p2, a, b, s), callable like scipy's OdeSolution
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -116,115 +116,24 @@ def constrained_rates(params: SleighParams, kappa, p1, p2, a, b, u):
     return adot, bdot, n
 
 
-class _TooStiff(Exception):
-    """The integration needed more right-hand-side evaluations than a manoeuvre can."""
-
-
-_MAX_EVALUATIONS = 150_000
-
-
-def _rhs_factory(params: SleighParams, kappa: float, ufun):
-    M, m, I = params.M, params.m, params.I
-    MI = M * m
-    Mm = M + m
-    calls = [0]
-
-    # The model's formulas inlined with scalar math: this runs thousands of times per solve, and
-    # numpy's per-call overhead would dominate. Tests compare it with model.rhs and
-    # constrained_rates.
-    def f(t, y):
-        calls[0] += 1
-        if calls[0] > _MAX_EVALUATIONS:
-            # Only near the singular point or a blow-up does the step size collapse like this.
-            raise _TooStiff
-        p1, p2, a, b, _ = y
-        u = ufun(t)
-        c_a = m * (M * b + kappa * (I + m * a * a))
-        c_b = m * a * (kappa * m * b - Mm)
-        c_0 = (Mm - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
-        n2 = c_a * c_a + c_b * c_b
-        if not n2 > 0.0:  # exactly at the singular point (or NaN): no rate holds the curvature
-            raise _TooStiff
-        n = math.sqrt(n2)
-        ad = -u * c_b / n - c_0 * c_a / n2
-        bd = u * c_a / n - c_0 * c_b / n2
-        D = Mm * (I + m * a * a) + MI * b * b
-        q = p1 - m * a * bd
-        r = p2 + M * ad
-        xi1 = (Mm * q + m * b * r) / D
-        xi2 = (m * (b * q - (I + m * a * a) * ad) + (I + m * (a * a + b * b)) * p2) / D
-        eta = ((MI * b * b + I * Mm) * bd + a * (Mm * p1 + m * b * r)) / D
-        return [-m * eta * xi2, m * eta * xi1, ad, bd, xi2]
-
-    return f
-
-
-def _integrate(params, y0, legs_spec, ufun, t_end, *, rtol, atol, events=(), dense=True):
-    """Integrate the constrained system through legs ``[(kappa, s_switch), ...]``.
+def _integrate(params, y0, legs_spec, alpha, t_end, *, rtol, atol, stop=False, singular_limit=0.0, dense=True):
+    """Integrate the constrained system under ``u = alpha t`` through legs ``[(kappa, s_switch), ...]``.
 
     A leg ends when ``|s|`` reaches its ``s_switch`` (the last leg's is ``inf``) or at ``t_end``.
-    Returns (legs, status, final_t, final_y, event_hit) where ``event_hit`` names a terminal event.
+    ``stop`` and ``singular_limit`` arm the terminal events of :func:`integrate_legs`. Returns
+    ``(legs, status, t, y, hit)``: the legs entered (``None`` each unless ``dense``), 0 or a
+    negative failure code, the final time and state, and the name of the terminal event hit.
     """
-    legs = []
-    t0, y = 0.0, np.asarray(y0, dtype=float)
-    for i, (kappa, s_switch) in enumerate(legs_spec):
-        evs = []
-        if math.isfinite(s_switch):
-
-            def join(t, y, _s=s_switch):
-                return abs(y[4]) - _s
-
-            join.terminal = True
-            evs.append(join)
-        user = [ev(kappa, ufun) for ev in events]
-        evs.extend(user)
-        try:
-            sol = solve_ivp(
-                _rhs_factory(params, kappa, ufun), (t0, t_end), y, method="DOP853",
-                rtol=rtol, atol=atol, dense_output=dense, events=evs or None,
-            )
-        except _TooStiff:
-            return legs, -1, t0, y, "step size collapsed"
-        if sol.status < 0:
-            return legs, sol.status, sol.t[-1], sol.y[:, -1], sol.message
-        legs.append(Leg(kappa, t0, float(sol.t[-1]), sol.sol))
-        hit = None
-        if sol.status == 1:
-            offset = 1 if math.isfinite(s_switch) else 0
-            for j, te in enumerate(sol.t_events[offset:]):
-                if len(te):
-                    hit = events[j].__name__
-            if hit is None and i + 1 < len(legs_spec):
-                t0, y = float(sol.t[-1]), sol.y[:, -1]
-                continue
-        return legs, 0, float(sol.t[-1]), sol.y[:, -1], hit
-    return legs, 0, t0, y, None
+    res = integrate_legs(params, y0, [k for k, _ in legs_spec], [s for _, s in legs_spec], alpha, t_end,
+                         rtol=rtol, atol=atol, stop_event=stop, singular_limit=singular_limit,
+                         max_nfev=_MAX_EVALUATIONS, dense=dense)
+    bounds = res.leg_bounds
+    legs = [Leg(float(legs_spec[i][0]), float(bounds[i]), float(bounds[i + 1]), res.legs[i] if dense else None)
+            for i in range(res.nlegs)]
+    return legs, res.status, res.t, res.y, res.hit
 
 
-def _singular_event(params, limit):
-    def make(kappa, ufun):
-        sa, sb = 0.0, -kappa * params.I / params.M
-
-        def singular(t, y):
-            return math.hypot(y[2] - sa, y[3] - sb) - limit
-
-        singular.terminal = True
-        return singular
-
-    make.__name__ = "singular"
-    return make
-
-
-def _stop_event(params):
-    def make(kappa, ufun):
-        def stopped(t, y, _k=kappa):
-            return _end_speed(params, _k, y, ufun(t))
-
-        stopped.terminal = True
-        return stopped
-
-    make.__name__ = "stopped"
-    return make
+_MAX_EVALUATIONS = 150_000 * 4  # per integration: only near a blow-up does the step size collapse like this
 
 
 def _end_speed(params, kappa, y, u):
@@ -290,8 +199,6 @@ def solve_stop(
     y0 = np.array([p[0], p[1], a0, b0, 0.0])
     sign = -1.0 if backward else 1.0
     scale = params.length_scale
-    sing = _singular_event(params, singular_limit * scale)
-    stop = _stop_event(params)
     # Natural time and control scales: time ~ length / speed, u ~ speed^2 / length.
     t_nat = length / speed
     u_nat = speed * speed / length
@@ -301,8 +208,8 @@ def solve_stop(
         nonlocal nfev
         nfev += 1
         legs, status, tf, yf, hit = _integrate(
-            params, y0, legs_spec, lambda t: alpha * t, sign * 60.0 * t_nat,
-            rtol=1e-9, atol=1e-11, events=(sing, stop), dense=False,
+            params, y0, legs_spec, alpha, sign * 60.0 * t_nat, rtol=1e-9, atol=1e-11,
+            stop=True, singular_limit=singular_limit * scale, dense=False,
         )
         if status != 0 or hit != "stopped":
             return None, tf
@@ -338,9 +245,7 @@ def solve_stop(
         if sol[0] is None:
             continue
         (alpha, tau), res = sol[0], sol[1]
-        legs, status, tf, yf, hit = _integrate(
-            params, y0, legs_spec, lambda t, _a=alpha: _a * t, tau, rtol=rtol, atol=atol
-        )
+        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol)
         dist = _min_singular_distance(params, legs)
         if best is None or dist > best[3]:
             best = (alpha, tau, legs, dist, res)
@@ -365,9 +270,7 @@ def _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol,
         nonlocal count
         count += 1
         alpha, tau = z[0] * alpha0, z[1] * tau0
-        legs, status, tf, yf, hit = _integrate(
-            params, y0, legs_spec, lambda t: alpha * t, tau, rtol=rtol, atol=atol, dense=False
-        )
+        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol, dense=False)
         if status != 0 or len(legs) < len(legs_spec) or not np.all(np.isfinite(yf)):
             return np.array([1e3, 1e3])
         v = _end_speed(params, legs_spec[-1][0], yf, alpha * tau)

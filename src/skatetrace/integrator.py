@@ -1,0 +1,451 @@
+"""A compiled DOP853 integrator for the sleigh held on a curve (the manoeuvre solves).
+
+Newton's method integrates a manoeuvre many times per section (a bracketing scan, then every
+residual and Jacobian column), so the integration dominates the time of a trace. This module is
+scipy's DOP853 (:class:`scipy.integrate.DOP853`) step for step (the same coefficients, error norm,
+step-size control, initial step, event rule and 7th-order dense output), specialised to the
+constrained system of :mod:`skatetrace.maneuver` and compiled with numba. A test compares it with
+``solve_ivp(method="DOP853")`` on the same problem.
+
+The system integrated is ``y = (p1, p2, a, b, s)`` under the ramp control ``u = alpha t`` through
+*legs* of constant curvature: a leg ends where ``|s|`` reaches its switch length and the next one
+starts from that state (a smooth join). Two terminal events may be armed: the speed along the
+blade vanishing (``"stopped"``) and the mass coming within a distance of the singular point
+(``"singular"``).
+
+Set the environment variable ``NUMBA_DISABLE_JIT=1`` to run the same code as plain Python.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+from .model import SleighParams
+
+__all__ = ["DenseSolution", "IntegrationResult", "integrate_legs"]
+
+_NS = _dop.N_STAGES  # 12
+_A = np.ascontiguousarray(_dop.A[:_NS, :_NS])
+_B = np.ascontiguousarray(_dop.B)
+_C = np.ascontiguousarray(_dop.C[:_NS])
+_E3 = np.ascontiguousarray(_dop.E3)
+_E5 = np.ascontiguousarray(_dop.E5)
+_D = np.ascontiguousarray(_dop.D)
+_A_EXTRA = np.ascontiguousarray(_dop.A[_NS + 1:])
+_C_EXTRA = np.ascontiguousarray(_dop.C[_NS + 1:])
+_POWER = _dop.INTERPOLATOR_POWER  # 7
+
+# Status codes of the compiled loop
+_REACHED, _STOPPED, _SINGULAR = 0, 1, 2
+_EXHAUSTED, _SMALL_STEP, _NONFINITE = -1, -2, -3
+_MESSAGES = {
+    _REACHED: "reached the end of the interval",
+    _STOPPED: "the speed along the blade vanished",
+    _SINGULAR: "the mass reached the singular point's neighbourhood",
+    _EXHAUSTED: "step size collapsed (evaluation budget exhausted or the control law is singular)",
+    _SMALL_STEP: "required step size is less than spacing between numbers",
+    _NONFINITE: "the state became non-finite",
+}
+
+
+@njit(cache=True)
+def _rhs(M, m, I, kappa, alpha, t, y, out):
+    """Right-hand side of ``(p1, p2, a, b, s)``; returns False at the singular point itself."""
+    p1, p2, a, b = y[0], y[1], y[2], y[3]
+    u = alpha * t
+    Mm = M + m
+    c_a = m * (M * b + kappa * (I + m * a * a))
+    c_b = m * a * (kappa * m * b - Mm)
+    c_0 = (Mm - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
+    n2 = c_a * c_a + c_b * c_b
+    if not n2 > 0.0:
+        return False
+    n = math.sqrt(n2)
+    ad = -u * c_b / n - c_0 * c_a / n2
+    bd = u * c_a / n - c_0 * c_b / n2
+    D = Mm * (I + m * a * a) + M * m * b * b
+    q = p1 - m * a * bd
+    r = p2 + M * ad
+    xi1 = (Mm * q + m * b * r) / D
+    xi2 = (m * (b * q - (I + m * a * a) * ad) + (I + m * (a * a + b * b)) * p2) / D
+    eta = ((M * m * b * b + I * Mm) * bd + a * (Mm * p1 + m * b * r)) / D
+    out[0] = -m * eta * xi2
+    out[1] = m * eta * xi1
+    out[2] = ad
+    out[3] = bd
+    out[4] = xi2
+    return True
+
+
+@njit(cache=True)
+def _speed(M, m, I, kappa, alpha, t, y):
+    """Speed along the blade ``xi2`` (the ``"stopped"`` event); NaN at the singular point."""
+    out = np.empty(5)
+    if not _rhs(M, m, I, kappa, alpha, t, y, out):
+        return np.nan
+    return out[4]
+
+
+@njit(cache=True)
+def _rms(x):
+    return math.sqrt(np.sum(x * x) / x.size)
+
+
+@njit(cache=True)
+def _interpolate(t_old, h, y_old, F, t):
+    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``)."""
+    x = (t - t_old) / h
+    y = np.zeros(y_old.size)
+    for i in range(F.shape[0] - 1, -1, -1):
+        y += F[i]
+        if (F.shape[0] - 1 - i) % 2 == 0:
+            y *= x
+        else:
+            y *= 1.0 - x
+    return y + y_old
+
+
+@njit(cache=True)
+def _event_values(M, m, I, kappa, alpha, t, y, switch, stop_event, sing_b, sing_limit, g):
+    """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit."""
+    g[0] = abs(y[4]) - switch
+    g[1] = _speed(M, m, I, kappa, alpha, t, y) if stop_event else 1.0
+    g[2] = math.hypot(y[2], y[3] - sing_b) - sing_limit if sing_limit > 0.0 else 1.0
+
+
+@njit(cache=True)
+def _dense_coefficients(M, m, I, kappa, alpha, t_old, h, y_old, y_new, f_new, K):
+    """The interpolant's coefficients F (7 x n) for the step just taken (3 extra stages)."""
+    n = y_old.size
+    Kx = np.empty((16, n))
+    Kx[:_NS + 1] = K
+    tmp = np.empty(n)
+    for s in range(_NS + 1, 16):
+        dy = np.zeros(n)
+        for j in range(s):
+            dy += _A_EXTRA[s - _NS - 1, j] * Kx[j]
+        _rhs(M, m, I, kappa, alpha, t_old + _C_EXTRA[s - _NS - 1] * h, y_old + dy * h, tmp)
+        Kx[s] = tmp
+    F = np.empty((_POWER, n))
+    dy = y_new - y_old
+    F[0] = dy
+    F[1] = h * Kx[0] - dy
+    F[2] = 2.0 * dy - h * (f_new + Kx[0])
+    for i in range(4):
+        acc = np.zeros(n)
+        for j in range(16):
+            acc += _D[i, j] * Kx[j]
+        F[3 + i] = h * acc
+    return F
+
+
+@njit(cache=True)
+def _initial_step(M, m, I, kappa, alpha, t0, y0, f0, t_bound, direction, rtol, atol):
+    """scipy's ``select_initial_step`` for an 8th-order method (error estimator order 7)."""
+    interval = abs(t_bound - t0)
+    if interval == 0.0:
+        return 0.0
+    scale = atol + np.abs(y0) * rtol
+    d0 = _rms(y0 / scale)
+    d1 = _rms(f0 / scale)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    y1 = y0 + h0 * direction * f0
+    f1 = np.empty(y0.size)
+    _rhs(M, m, I, kappa, alpha, t0 + h0 * direction, y1, f1)
+    d2 = _rms((f1 - f0) / scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+    return min(100.0 * h0, h1, interval)
+
+
+@njit(cache=True)
+def _grow(arr, n):
+    out = np.empty((2 * arr.shape[0],) + arr.shape[1:])
+    out[:n] = arr[:n]
+    return out
+
+
+@njit(cache=True)
+def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, sing_limit, max_nfev, dense):
+    """Integrate through the legs; see :func:`integrate_legs`.
+
+    Returns ``(status, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps)``.
+    """
+    n = y0.size
+    nlegs = kappas.size
+    direction = 1.0 if t_end >= 0.0 else -1.0
+    t = 0.0
+    y = y0.copy()
+    leg_bounds = np.empty(nlegs + 1)
+    leg_bounds[0] = 0.0
+    cap = 64 if dense else 1
+    step_t = np.empty(cap)
+    step_h = np.empty(cap)
+    step_y = np.empty((cap, n))
+    step_F = np.empty((cap, _POWER, n))
+    step_leg = np.empty(cap)
+    nsteps = 0
+    nfev = 0
+    K = np.empty((_NS + 1, n))
+    ytmp = np.empty(n)
+    ynew = np.empty(n)
+    kstage = np.empty(n)
+    f = np.empty(n)
+    f_new = np.empty(n)
+    g_old = np.empty(3)
+    g_new = np.empty(3)
+    for leg in range(nlegs):
+        kappa = kappas[leg]
+        switch = switches[leg]
+        sing_b = -kappa * I / M
+        if not _rhs(M, m, I, kappa, alpha, t, y, f):
+            return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+        nfev += 1
+        _event_values(M, m, I, kappa, alpha, t, y, switch, stop_event, sing_b, sing_limit, g_old)
+        h_abs = _initial_step(M, m, I, kappa, alpha, t, y, f, t_end, direction, rtol, atol)
+        nfev += 1
+        while True:
+            if direction * (t_end - t) <= 0.0:
+                leg_bounds[leg + 1] = t
+                return _REACHED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+            min_step = 10.0 * abs(np.nextafter(t, direction * np.inf) - t)
+            if h_abs < min_step:
+                h_abs = min_step
+            accepted = False
+            rejected = False
+            while not accepted:
+                if h_abs < min_step:
+                    return _SMALL_STEP, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+                h = h_abs * direction
+                t_new = t + h
+                if direction * (t_new - t_end) > 0.0:
+                    t_new = t_end
+                h = t_new - t
+                h_abs = abs(h)
+                # one Runge-Kutta step (scipy's rk_step), written out without temporaries
+                for i in range(n):
+                    K[0, i] = f[i]
+                ok = True
+                for s in range(1, _NS):
+                    for i in range(n):
+                        acc = 0.0
+                        for j in range(s):
+                            acc += _A[s, j] * K[j, i]
+                        ytmp[i] = y[i] + acc * h
+                    if not _rhs(M, m, I, kappa, alpha, t + _C[s] * h, ytmp, kstage):
+                        ok = False
+                    for i in range(n):
+                        K[s, i] = kstage[i]
+                nfev += _NS
+                for i in range(n):
+                    acc = 0.0
+                    for j in range(_NS):
+                        acc += _B[j] * K[j, i]
+                    ynew[i] = y[i] + h * acc
+                if not _rhs(M, m, I, kappa, alpha, t + h, ynew, f_new):
+                    ok = False
+                nfev += 1
+                if not ok or nfev > max_nfev:
+                    return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+                for i in range(n):
+                    K[_NS, i] = f_new[i]
+                e5n = 0.0
+                e3n = 0.0
+                for i in range(n):
+                    sc = atol + max(abs(y[i]), abs(ynew[i])) * rtol
+                    e5 = 0.0
+                    e3 = 0.0
+                    for j in range(_NS + 1):
+                        e5 += _E5[j] * K[j, i]
+                        e3 += _E3[j] * K[j, i]
+                    e5n += (e5 / sc) ** 2
+                    e3n += (e3 / sc) ** 2
+                if e5n == 0.0 and e3n == 0.0:
+                    err = 0.0
+                else:
+                    err = h_abs * e5n / math.sqrt((e5n + 0.01 * e3n) * n)
+                if err < 1.0:
+                    factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
+                    if rejected:
+                        factor = min(1.0, factor)
+                    h_abs *= factor
+                    accepted = True
+                else:
+                    if err != err:  # NaN: shrink as far as scipy would
+                        h_abs *= 0.2
+                    else:
+                        h_abs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
+                    rejected = True
+            if not np.all(np.isfinite(ynew)):
+                return _NONFINITE, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+            # events: a sign change (or touch of zero) between the step's ends, as in solve_ivp
+            _event_values(M, m, I, kappa, alpha, t_new, ynew, switch, stop_event, sing_b, sing_limit, g_new)
+            active = False
+            for e in range(3):
+                if (g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0):
+                    active = True
+            F = np.empty((_POWER, n))
+            if dense or active:
+                F = _dense_coefficients(M, m, I, kappa, alpha, t, h, y, ynew, f_new, K)
+                nfev += 3
+            hit = -1
+            t_hit = t_new
+            if active:
+                g = np.empty(3)
+                for e in range(3):
+                    if not ((g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0)):
+                        continue
+                    # bisection on the dense output down to adjacent floating-point numbers
+                    lo, hi = t, t_new
+                    glo = g_old[e]
+                    for _ in range(200):
+                        mid = 0.5 * (lo + hi)
+                        if mid == lo or mid == hi:
+                            break
+                        _event_values(M, m, I, kappa, alpha, mid, _interpolate(t, h, y, F, mid), switch,
+                                      stop_event, sing_b, sing_limit, g)
+                        if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
+                            lo, glo = mid, g[e]
+                        else:
+                            hi = mid
+                    root = hi if glo != 0.0 else lo
+                    if hit < 0 or direction * (root - t_hit) < 0.0:
+                        hit, t_hit = e, root
+            if dense:
+                if nsteps == step_t.size:
+                    step_t = _grow(step_t, nsteps)
+                    step_h = _grow(step_h, nsteps)
+                    step_y = _grow(step_y, nsteps)
+                    step_F = _grow(step_F, nsteps)
+                    step_leg = _grow(step_leg, nsteps)
+                step_t[nsteps] = t
+                step_h[nsteps] = h
+                step_y[nsteps] = y
+                step_F[nsteps] = F
+                step_leg[nsteps] = leg
+                nsteps += 1
+            if hit >= 0:
+                yh = _interpolate(t, h, y, F, t_hit)
+                if hit == 0 and leg + 1 < nlegs:
+                    t, y = t_hit, yh
+                    leg_bounds[leg + 1] = t
+                    break  # next leg, from the join
+                leg_bounds[leg + 1] = t_hit
+                status = _REACHED if hit == 0 else (_STOPPED if hit == 1 else _SINGULAR)
+                return status, leg, t_hit, yh, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+            t = t_new
+            for i in range(n):
+                y[i] = ynew[i]
+                f[i] = f_new[i]
+            for e in range(3):
+                g_old[e] = g_new[e]
+    return _REACHED, nlegs - 1, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+
+
+class DenseSolution:
+    """Piecewise DOP853 interpolant of one leg, callable like scipy's ``OdeSolution``.
+
+    ``sol(t)`` returns shape ``(5,)`` for a scalar ``t`` and ``(5, n)`` for an array; times
+    outside the steps are extrapolated from the nearest step (as scipy does).
+    """
+
+    __slots__ = ("t_old", "h", "y_old", "F", "_ends")
+
+    def __init__(self, t_old: np.ndarray, h: np.ndarray, y_old: np.ndarray, F: np.ndarray):
+        order = np.argsort(t_old) if h.size and h[0] < 0 else np.arange(t_old.size)
+        self.t_old, self.h, self.y_old, self.F = t_old[order], h[order], y_old[order], F[order]
+        self._ends = np.minimum(self.t_old, self.t_old + self.h)  # left end of each step
+
+    def __getstate__(self):
+        return (self.t_old, self.h, self.y_old, self.F)
+
+    def __setstate__(self, state):
+        self.__init__(*state)
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        scalar = t.ndim == 0
+        tt = np.atleast_1d(t)
+        i = np.clip(np.searchsorted(self._ends, tt, side="right") - 1, 0, self._ends.size - 1)
+        x = ((tt - self.t_old[i]) / self.h[i])[:, None]
+        F = self.F[i]  # (k, 7, 5)
+        y = np.zeros((tt.size, self.y_old.shape[1]))
+        for j in range(F.shape[1] - 1, -1, -1):
+            y += F[:, j]
+            y *= x if (F.shape[1] - 1 - j) % 2 == 0 else (1.0 - x)
+        y += self.y_old[i]
+        return y[0] if scalar else y.T
+
+
+@dataclass(frozen=True, slots=True)
+class IntegrationResult:
+    """Outcome of :func:`integrate_legs`.
+
+    ``status`` is 0 (reached ``t_end``, or the last join with no leg after it), ``"stopped"`` or
+    ``"singular"`` for a terminal event, or a negative code for a failure (see ``message``).
+    ``leg_bounds`` are the times at which each leg started and the last one ended; ``legs`` the
+    dense solutions (``dense=True`` only), one per leg entered.
+    """
+
+    status: int
+    hit: str | None
+    message: str
+    t: float
+    y: np.ndarray
+    leg_bounds: np.ndarray
+    legs: tuple[DenseSolution, ...]
+
+    @property
+    def nlegs(self) -> int:
+        return self.leg_bounds.size - 1
+
+
+def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_end: float, *,
+                   rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
+                   max_nfev: int = 150_000, dense: bool = False) -> IntegrationResult:
+    """Integrate ``(p1, p2, a, b, s)`` from ``t = 0`` under ``u = alpha t`` through legs.
+
+    Parameters
+    ----------
+    y0 : array_like, shape (5,)
+    kappas, switches : sequences of float
+        Curvature of each leg and the ``|s|`` at which it ends (``inf`` for the last).
+    t_end : float
+        Final time; negative integrates backwards.
+    stop_event : bool
+        End where the speed along the blade vanishes.
+    singular_limit : float
+        If positive, end where the mass comes within this distance of the singular point.
+    max_nfev : int
+        Budget of right-hand-side evaluations; running out means the step size collapsed.
+    dense : bool
+        Keep the dense output of every step.
+    """
+    kap = np.asarray(kappas, dtype=float)
+    sw = np.asarray(switches, dtype=float)
+    y = np.asarray(y0, dtype=float).copy()
+    out = _run(params.M, params.m, params.I, y, kap, sw, float(alpha), float(t_end), float(rtol), float(atol),
+               bool(stop_event), float(singular_limit), int(max_nfev), bool(dense))
+    status, leg, t, yf, bounds, st, sh, sy, sF, sleg, ns = out
+    nlegs = int(leg) + 1
+    legs = ()
+    if dense and status >= 0:
+        legs = tuple(
+            DenseSolution(st[:ns][sel], sh[:ns][sel], sy[:ns][sel], sF[:ns][sel])
+            for sel in (sleg[:ns] == k for k in range(nlegs))
+        )
+    hit = {_STOPPED: "stopped", _SINGULAR: "singular"}.get(int(status))
+    code = 0 if status >= 0 else int(status)
+    return IntegrationResult(status=code, hit=hit, message=_MESSAGES[int(status)], t=float(t), y=np.asarray(yf),
+                             leg_bounds=np.asarray(bounds[:nlegs + 1]), legs=legs)
