@@ -164,11 +164,12 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     cubic Hermite interpolant of the positions (velocities from the model) on the two adjacent
     sample intervals, by golden-section search, so the chord error of a polyline does not count.
     """
-    # Chunks share their end instants; drop the repeats so that every interval has length > 0
-    # (positions are continuous there, only the control rates jump).
-    idx_all = np.flatnonzero(mask)
-    keep = np.diff(rep.t[idx_all], prepend=-np.inf) > 0
-    sel = idx_all[keep]
+    # Chunks share their end instants: a repeated time carries the limits from the left and from the
+    # right, and the blade's speed jumps there with the control rates (the momenta are continuous).
+    # Both rows are kept, so each interval is interpolated with its own one-sided velocities; the
+    # zero-length interval between them is skipped, and three intervals around the nearest sample
+    # are searched so that the one past a repeated time is never missed.
+    sel = np.flatnonzero(mask)
     t = rep.t[sel]
     st = rep.state[:, sel]
     ctl = rep.controls[:, sel]
@@ -177,7 +178,7 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     x, y = st[3], st[4]
     _, idx = cKDTree(np.vstack([x, y]).T).query(points.T)
     best = np.hypot(x[idx] - points[0], y[idx] - points[1])
-    for j in (np.maximum(idx - 1, 0), idx):
+    for j in (np.maximum(idx - 2, 0), np.maximum(idx - 1, 0), idx, np.minimum(idx + 1, t.size - 1)):
         k = np.minimum(j + 1, t.size - 1)
         h = t[k] - t[j]
         valid = h > 0
