@@ -1,0 +1,42 @@
+"""Adaptive sampling of controls for cubic Hermite interpolation."""
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicHermiteSpline
+
+from skatetrace.controls import sample_adaptively
+
+
+def _fn(t):
+    return np.sin(3 * t), 5 * np.cos(t), 3 * np.cos(3 * t), -5 * np.sin(t)
+
+
+@pytest.mark.parametrize("value_tol, rate_tol", [(1e-11, 1e-9), (1e-12, 1e-10), (1e-8, 1e-6)])
+def test_sampling_meets_its_relative_tolerances_everywhere(value_tol, rate_tol):
+    t = sample_adaptively(_fn, 0.0, 10.0, value_tol=value_tol, rate_tol=rate_tol)
+    assert np.all(np.diff(t) > 0) and t[0] == 0.0 and t[-1] == 10.0
+    a, b, ad, bd = _fn(t)
+    tt = np.linspace(0.0, 10.0, 200_001)
+    ref = _fn(tt)
+    sa, sb = CubicHermiteSpline(t, a, ad), CubicHermiteSpline(t, b, bd)
+    v_scale, r_scale = 5.0, 5.0  # largest |a|, |b| and largest rate
+    # the checks sit at u = 1/2 (values) and u = 1/4 (rates, 97 % of the largest error), and rates
+    # are not refined below the rounding of (y1 - y0) / h: allow 10 %
+    assert max(np.abs(sa(tt) - ref[0]).max(), np.abs(sb(tt) - ref[1]).max()) <= 1.1 * value_tol * v_scale
+    rate_err = max(np.abs(sa.derivative()(tt) - ref[2]).max(), np.abs(sb.derivative()(tt) - ref[3]).max())
+    assert rate_err <= 1.1 * rate_tol * r_scale
+    # and it does not oversample: the rate error is within a factor 10 of what was asked
+    assert rate_err > 0.1 * rate_tol * r_scale or t.size <= 16
+
+
+def test_sampling_stops_at_the_rounding_floor_of_noisy_controls():
+    # values with rounding-level noise cannot satisfy a rate tolerance below eps / h: no runaway
+    # (before the floor, halving went on until the intervals were a few ulps long)
+    rng = np.random.default_rng(0)
+
+    def noisy(t):
+        a = np.sin(t) * (1 + 1e-15 * rng.standard_normal(t.size))
+        return a, a, np.cos(t), np.cos(t)
+
+    t = sample_adaptively(noisy, 0.0, 1.0, value_tol=1e-15, rate_tol=1e-15)
+    assert t.size < 20_000
