@@ -40,3 +40,17 @@ def test_sampling_stops_at_the_rounding_floor_of_noisy_controls():
 
     t = sample_adaptively(noisy, 0.0, 1.0, value_tol=1e-15, rate_tol=1e-15)
     assert t.size < 20_000
+
+
+def test_sampling_terminates_at_a_kink_of_the_values():
+    # values with kinks that the smooth rates do not show (as between two steps of an ODE solver's
+    # dense output): a tent 1e-9 high and 2e-4 wide, whose slopes differ from the rates by 1e-5;
+    # halving stops at min_step, so the tent costs at most its width / min_step points
+    def kinked(t):
+        a = np.sin(t) + 1e-9 * np.maximum(0.0, 1.0 - np.abs(t - 0.3) / 1e-4)
+        return a, a, np.cos(t), np.cos(t)
+
+    smooth = sample_adaptively(lambda t: (np.sin(t), np.sin(t), np.cos(t), np.cos(t)), 0.0, 1.0)
+    t = sample_adaptively(kinked, 0.0, 1.0, min_step=1e-7)
+    assert t.size <= smooth.size + 2e-4 / 1e-7
+    assert np.min(np.diff(t)) >= 1e-7

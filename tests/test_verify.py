@@ -41,3 +41,14 @@ def test_figure_to_replay_uses_the_velocity_on_each_side_of_a_jump():
     # the same replay interpolated with the left-hand speed past the jump strays by far more
     bad = _circle_replay(params, np.delete(times, 11), np.delete(speeds, 11))
     assert verify_module._figure_to_replay(points, bad, np.ones(times.size - 1, bool), params).max() > 1e-4
+
+
+def test_figure_to_replay_sees_past_a_run_of_repeated_rows():
+    # a replay chunk of zero length (many rows at one instant) must not hide the intervals around it
+    params = SleighParams()
+    times = np.concatenate([np.linspace(0.0, 1.0, 11), np.full(20, 1.0), np.linspace(1.0, 2.0, 11)])
+    speeds = np.ones(times.size)
+    rep = _circle_replay(params, times, speeds)
+    ang = np.linspace(0.0, 2.0, 400)
+    d = verify_module._figure_to_replay(np.vstack([np.cos(ang), np.sin(ang)]), rep, np.ones(times.size, bool), params)
+    assert d.max() < 1e-6, d.max()

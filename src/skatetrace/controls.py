@@ -76,20 +76,22 @@ class ControlSchedule:
 
 
 def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-12, rate_tol: float = 1e-10,
-                      n0: int = 16, max_points: int = 200_000) -> np.ndarray:
+                      n0: int = 16, max_points: int = 200_000, min_step: float = 1e-7) -> np.ndarray:
     """Times on ``[t0, t1]`` at which Hermite interpolation of ``fn`` meets the tolerances.
 
     ``fn(t)`` returns ``(a, b, adot, bdot)`` arrays. Every interval is bisected until the cubic
     Hermite interpolant of its end values and rates agrees at its midpoint with ``fn`` to
     ``value_tol`` times the largest ``|a|, |b|`` and, for the derivative, to ``rate_tol`` times
-    the largest rate (relative tolerances, so that metres and model units sample alike). Only
-    the midpoints of unfinished intervals are evaluated, so the cost is linear in the result.
+    the largest rate (relative tolerances, so that metres and model units sample alike). No
+    interval is made shorter than ``min_step`` times the span. Only the midpoints of unfinished
+    intervals are evaluated, so the cost is linear in the result.
     """
     t = np.linspace(t0, t1, n0)
     v = np.vstack(fn(t))  # (4, n): a, b, adot, bdot
     v_scale = max(float(np.max(np.abs(v[:2]))), 1e-300)
     r_scale = max(float(np.max(np.abs(v[2:]))), 1e-300)
     todo = np.arange(t.size - 1)  # intervals [t[i], t[i + 1]] still to check
+    h_min = min_step * (t1 - t0)
     while todo.size and t.size < max_points:
         lo, hi = t[todo], t[todo + 1]
         h = hi - lo
@@ -107,7 +109,10 @@ def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-12, rat
         floor = 16.0 * np.finfo(float).eps * v_scale / h
         bad = np.any(np.abs(value - vm[:2]) > value_tol * v_scale, axis=0)
         bad |= np.any(np.abs(rate - vq[2:]) > rate_tol * r_scale + floor, axis=0)
-        bad &= (mid > lo) & (mid < hi)  # an interval that cannot be halved any more is as good as it gets
+        # Intervals are not halved below h_min: where the values come from a piecewise interpolant
+        # (an ODE solver's dense output) their slope may jump between steps by more than the rate
+        # tolerance, and no halving would ever satisfy it there.
+        bad &= h > 2.0 * h_min
         if not np.any(bad):
             break
         # insert the midpoints of the bad intervals; each becomes two unfinished intervals

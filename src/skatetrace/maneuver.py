@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import root
+from scipy.optimize import brentq, root
 
 from .integrator import integrate_legs
 from .model import SleighParams, curvature_coefficients, velocities
@@ -229,7 +229,7 @@ def solve_stop(
                 w = (math.log(l1) - math.log(length)) / (math.log(l1) - math.log(l2)) if l1 != l2 else 0.5
                 alpha = a1 * (a2 / a1) ** w
                 tau = t1 + w * (t2 - t1)
-                candidates.append((alpha, tau))
+                candidates.append((alpha, tau, a1, a2))
                 break
     if not candidates:
         return ManeuverSolution(
@@ -239,9 +239,15 @@ def solve_stop(
         )
 
     best = None
-    for alpha0, tau0 in candidates:
-        sol = _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol)
+    for alpha0, tau0, a1, a2 in candidates:
+        # Root of the event-located stopping length on the bracket first (cannot diverge), then
+        # Newton's method on (alpha, tau) from the interpolated guess.
+        sol = _bracket_stop(params, legs_spec, y0, sign * 60.0 * t_nat, speed, length, a1, a2, rtol, atol,
+                            singular_limit * scale)
         nfev += sol[2]
+        if sol[0] is None:
+            sol = _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol)
+            nfev += sol[2]
         if sol[0] is None:
             continue
         (alpha, tau), res = sol[0], sol[1]
@@ -252,7 +258,8 @@ def solve_stop(
     if best is None:
         return ManeuverSolution(
             kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=nfev,
-            message=f"Newton's method did not converge for the {kind} of length {length:.6g}",
+            message=(f"neither the bracketed root nor Newton's method converged for the {kind} of length "
+                     f"{length:.6g}"),
         )
     alpha, tau, legs, dist, res = best
     ok = dist > singular_limit * scale
@@ -261,6 +268,45 @@ def solve_stop(
         residuals=res, min_singular_distance=dist, nfev=nfev,
         message="converged" if ok else f"mass came within {dist:.3g} of the singular point",
     )
+
+
+def _bracket_stop(params, legs_spec, y0, t_max, speed, length, a1, a2, rtol, atol, singular_limit):
+    """Brent's method for ``alpha`` in ``[a1, a2]``: the first stop of the speed falls at ``length``.
+
+    Returns ``((alpha, tau), residuals, nfev)`` or ``(None, None, nfev)`` if the bracket does not
+    hold at full accuracy or the stopping length jumps across it (the speed touching zero
+    earlier), so that the root leaves a residual.
+    """
+    count = 0
+
+    class _NoStop(Exception):
+        pass
+
+    def run(alpha):
+        nonlocal count
+        count += 1
+        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, t_max, rtol=rtol, atol=atol, stop=True,
+                                               singular_limit=singular_limit, dense=False)
+        if status != 0 or hit != "stopped":
+            raise _NoStop
+        return tf, yf
+
+    def excess(alpha):
+        return abs(run(alpha)[1][4]) - length
+
+    try:
+        f1, f2 = excess(a1), excess(a2)
+        if not f1 * f2 <= 0.0:
+            return None, None, count
+        alpha = brentq(excess, a1, a2, xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+        tau, yf = run(alpha)
+    except (_NoStop, RuntimeError):
+        return None, None, count
+    res = {"end_speed": float(_end_speed(params, legs_spec[-1][0], yf, alpha * tau)),
+           "length": float(abs(yf[4]) - length)}
+    if not (abs(res["end_speed"]) < 1e-11 * speed and abs(res["length"]) < 1e-11 * length):
+        return None, None, count
+    return (alpha, tau), res, count
 
 
 def _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol):

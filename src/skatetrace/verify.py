@@ -166,9 +166,9 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     """
     # Chunks share their end instants: a repeated time carries the limits from the left and from the
     # right, and the blade's speed jumps there with the control rates (the momenta are continuous).
-    # Both rows are kept, so each interval is interpolated with its own one-sided velocities; the
-    # zero-length interval between them is skipped, and three intervals around the nearest sample
-    # are searched so that the one past a repeated time is never missed.
+    # Both rows are kept, so each interval is interpolated with its own one-sided velocities. For
+    # the nearest sample, the two proper intervals (of positive length) before it and the two after
+    # it are searched, however many repeated rows lie between.
     sel = np.flatnonzero(mask)
     t = rep.t[sel]
     st = rep.state[:, sel]
@@ -178,10 +178,25 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     x, y = st[3], st[4]
     _, idx = cKDTree(np.vstack([x, y]).T).query(points.T)
     best = np.hypot(x[idx] - points[0], y[idx] - points[1])
-    for j in (np.maximum(idx - 2, 0), np.maximum(idx - 1, 0), idx, np.minimum(idx + 1, t.size - 1)):
-        k = np.minimum(j + 1, t.size - 1)
+    if t.size < 2:
+        return best
+    proper = np.diff(t) > 1e-12 * max(1.0, float(np.max(np.abs(t))))  # interval i = samples (i, i + 1)
+    ids = np.arange(proper.size)
+    # last proper interval ending at or before sample j, first one starting at or after it (-1 / size: none)
+    prev_end = np.maximum.accumulate(np.where(proper, ids, -1))  # index <= i
+    next_start = np.minimum.accumulate(np.where(proper, ids, proper.size)[::-1])[::-1]
+    prev_end = np.concatenate([[-1], prev_end])  # for sample j: intervals with index <= j - 1
+    next_start = np.concatenate([next_start, [proper.size]])  # for sample j: intervals with index >= j
+    p1 = prev_end[idx]
+    p2 = prev_end[np.maximum(p1, 0)]  # the one before (its end is at or before p1's start)
+    n1 = next_start[idx]
+    n2 = next_start[np.minimum(n1 + 1, proper.size)]
+    for cand in (p2, p1, n1, n2):
+        ok = (cand >= 0) & (cand < proper.size)
+        j = np.clip(cand, 0, proper.size - 1)
+        k = j + 1
         h = t[k] - t[j]
-        valid = h > 0
+        valid = ok & (h > 0)
         h = np.where(valid, h, 1.0)
 
         def pos(u):  # u in [0, 1] along interval j..k
