@@ -13,6 +13,7 @@ from .geometry import Pose, Segment
 from .model import SleighParams
 from .patterns import pattern, pattern_names
 from .presets import PAPER_PARAMS, skater_params
+from .rests import VerifiedTrace, add_rests, trace_and_verify
 from .school import school_figure, school_names
 from .simulate import Trajectory, simulate
 from .sources import Resolved, resolve
@@ -27,5 +28,6 @@ __all__ = [
     "figure_from_fit", "fit_drawing", "fit_path", "from_function", "load_drawing", "parse_length", "read_points",
     "read_svg", "resolve", "school_figure", "school_names", "skater_params",
     "Trajectory", "deviation_cost", "schedule_from_trace", "segments_target", "simulate", "trace_figure", "trace_section", "verify",
+    "VerifiedTrace", "add_rests", "trace_and_verify",
 ]
 __version__ = "0.1.0"

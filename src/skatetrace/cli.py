@@ -17,7 +17,8 @@ from .errors import SkatetraceError
 from .model import SleighParams
 from .patterns import pattern, pattern_names
 from .sources import DRAWING_SUFFIXES
-from .tracing import TraceOptions, trace_figure
+from .rests import REST_POLICIES
+from .tracing import TraceOptions
 
 __all__ = ["main"]
 
@@ -52,6 +53,10 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--speed", type=float, help="glide speed (default: 1 model unit, 2 m/s for figures in metres)")
     t.add_argument("--verify-tol", type=float, default=1e-6,
                    help="allowed deviation from the traced arcs as a fraction of the figure size (default 1e-6)")
+    t.add_argument("--rests", choices=REST_POLICIES, default="auto",
+                   help="rests at smooth joins: auto (where a section's replay fails verification, split it "
+                        "and the sections before it at their middle join and try again), never, or joins "
+                        "(at every smooth join); default auto")
     t.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     _add_source_args(t)
     f = sub.add_parser("fit", help="fit a drawing by arcs and lines only: pieces, arcs, certified tolerance, plot")
@@ -139,7 +144,7 @@ def _fit(args) -> int:
 
 def _trace(args) -> int:
     from .io import write_results
-    from .verify import schedule_from_trace, verify
+    from .rests import trace_and_verify
 
     t0 = time.perf_counter()
     res = _resolve(args, args.figure)
@@ -155,10 +160,14 @@ def _trace(args) -> int:
     def progress(done, total):
         print(f"\rtracing sections {done}/{total}", end="", file=sys.stderr, flush=True)
 
-    trace = trace_figure(figure, params, options, progress=progress)
+    done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, progress=progress)
     print(file=sys.stderr)
-    schedule, states = schedule_from_trace(trace)
-    report = verify(trace, schedule, rel_tol=args.verify_tol)
+    figure, trace, schedule, states, report = done.figure, done.trace, done.schedule, done.states, done.report
+    if done.rests:
+        where = ", ".join(f"before piece {pi}" + (f" of curve {ci}" if len(figure.curves) > 1 else "")
+                          for ci, pi in done.rests)
+        print(f"note: rests added at smooth joins ({where}): the replay of the longer sections strayed "
+              f"more than allowed; {done.rounds} trace-and-verify rounds")
     out = Path(args.out)
     write_results(out, trace, schedule, states, report)
     if res.fit is not None:

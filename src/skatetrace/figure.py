@@ -17,6 +17,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Iterable
 from typing import Any
 
 from .errors import FigureFormatError
@@ -58,6 +59,7 @@ class Join:
 
 
 SMOOTH = Join("smooth")
+REST = Join("cusp", 0.0)  # a stop at a smooth join: the path continues unchanged after it
 
 
 @dataclass(frozen=True, slots=True)
@@ -200,6 +202,25 @@ class Curve:
                 pieces.append(seg)
                 joins.append(join)
         return Curve(tuple(pieces), tuple(joins), self.repeat, self.closing, self.start, self.name)
+
+    def with_rests(self, before: Iterable[int]) -> "Curve":
+        """The same curve with the sleigh brought to rest at the smooth joins before pieces ``before``.
+
+        ``before`` are indices into :meth:`expanded` (the pieces of all copies). A rest is a cusp
+        without a pivot: the path on the ice is unchanged, but the join becomes the boundary of two
+        sections traced from rest to rest. The result lists all copies as pieces (``repeat = 1``,
+        the closing join kept for :meth:`closure`).
+        """
+        before = set(before)
+        if not before:
+            return self
+        items = self.expanded()
+        for i in before:
+            if not (0 < i < len(items)) or items[i][1] is None or items[i][1].is_cusp:
+                raise FigureFormatError(f"curve {self.name!r}: piece {i} does not follow a smooth join")
+        pieces = tuple(seg for seg, _ in items)
+        joins = tuple(REST if i in before else join for i, (_, join) in enumerate(items) if i > 0)
+        return Curve(pieces, joins, 1, self.closing, self.start, self.name)
 
     def centred_at(self, x: float, y: float) -> "Curve":
         """The same curve moved so that its repetition centre sits at ``(x, y)``."""

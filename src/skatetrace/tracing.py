@@ -484,7 +484,7 @@ def _section_key(params: SleighParams, section: Section, options: TraceOptions) 
 
 
 def trace_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
-                 progress=None) -> FigureTrace:
+                 progress=None, cache: dict | None = None) -> FigureTrace:
     """Trace every section of every curve of ``figure``.
 
     Sections that are the same up to a rigid motion (same curvatures and lengths) are solved once.
@@ -496,9 +496,11 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
         Defaults to the figure's own parameters, else the paper's ``M = 2, m = 1, I = 3``.
     progress : callable, optional
         Called as ``progress(done, total)`` after each section.
+    cache : dict, optional
+        Solved sections by shape; pass the same dict to several calls to reuse them.
     """
     params = params or figure.params or SleighParams()
-    cache: dict[tuple, SectionTrace] = {}
+    cache = {} if cache is None else cache
     traces, starts, t = [], [], 0.0
     all_sections = [(ci, sec) for ci, curve in enumerate(figure.curves) for sec in curve.sections()]
     for done, (ci, sec) in enumerate(all_sections, 1):

@@ -229,13 +229,14 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     size = trace.figure.size()
     tol = rel_tol * size
     rep = replay(trace, schedule)
+    cusp_limit = 1e-8 * trace.options.speed  # "at rest", relative to the glide speed
     xi1, xi2, _ = rep.velocities(params)
     sections, drifts, cusp_speeds = [], [], []
     dev_to, dev_from = 0.0, 0.0
     for si, sec in enumerate(trace.sections):
         m = rep.section == si
         if not sec.phases or not np.any(m):
-            sections.append({"section": si, "traced": False, "message": sec.message})
+            sections.append({"section": si, "traced": False, "passed": False, "message": sec.message})
             continue
         pts = rep.state[3:5, m]
         d_to = np.full(pts.shape[1], np.inf)
@@ -262,6 +263,8 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             "max_deviation_replay_to_figure": float(d_to.max()),
             "max_deviation_figure_to_replay": float(d_from.max()),
             "start_speed": speeds[0], "end_speed": speeds[1],
+            "passed": bool(sec.success and max(float(d_to.max()), float(d_from.max())) <= tol
+                           and max(speeds) <= cusp_limit),
         })
         dev_to, dev_from = max(dev_to, float(d_to.max())), max(dev_from, float(d_from.max()))
         for p in sec.section.pieces:
@@ -281,14 +284,13 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     if not np.all(np.isfinite(rep.state)):
         max_dev = math.inf  # the replay broke down somewhere: never let NaN pass a comparison
     max_cusp = max(cusp_speeds) if cusp_speeds else 0.0
-    speed_scale = trace.options.speed
     problems = []
     if not trace.success:
         problems.append(trace.message)
     if max_dev > tol:
         problems.append(f"deviation {max_dev:.3g} exceeds {tol:.3g} ({rel_tol:g} x figure size {size:.4g})")
-    if max_cusp > 1e-8 * speed_scale:
-        problems.append(f"speed at a cusp {max_cusp:.3g} exceeds {1e-8 * speed_scale:.3g}")
+    if max_cusp > cusp_limit:
+        problems.append(f"speed at a cusp {max_cusp:.3g} exceeds {cusp_limit:.3g}")
     ok = not problems
     return VerificationReport(
         success=ok, status="passed" if ok else "failed",

@@ -1,0 +1,103 @@
+"""Rests at smooth joins: the same path, shorter sections, and the trace-and-verify loop."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from skatetrace import rests as rests_module
+from skatetrace.errors import FigureFormatError
+from skatetrace.figure import REST, SMOOTH, Curve, Figure, Join
+from skatetrace.geometry import Pose, Segment
+from skatetrace.presets import skater_params
+from skatetrace.rests import add_rests, middle_join, trace_and_verify
+from skatetrace.tracing import TraceOptions
+
+
+def _s_curve():
+    segs = (Segment(1.0, 1.0), Segment(-0.5, 2.0), Segment(0.0, 0.5), Segment(0.8, 1.5))
+    return Curve(segs, (SMOOTH, SMOOTH, SMOOTH), start=Pose(0.3, -0.2, 0.4), name="s")
+
+
+def test_a_rest_keeps_the_path_and_splits_the_section():
+    c = _s_curve()
+    r = c.with_rests([2])
+    assert [p.start for p in r.layout()] == [p.start for p in c.layout()]
+    assert [p.direction for p in r.layout()] == [p.direction for p in c.layout()]
+    assert [len(s.pieces) for s in c.sections()] == [4]
+    assert [[p.index for p in s.pieces] for s in r.sections()] == [[0, 1], [2, 3]]
+    assert r.joins[1] == REST and REST.is_cusp and REST.pivot == 0.0 and not REST.reverse
+
+
+def test_rests_only_at_smooth_joins():
+    c = Curve((Segment(1.0, 1.0), Segment(1.0, 1.0)), (Join("cusp", 0.5),))
+    for bad in ([1], [0], [5]):
+        with pytest.raises(FigureFormatError, match="smooth join"):
+            c.with_rests(bad)
+    assert c.with_rests([]) is c
+
+
+def test_a_repeated_curve_is_listed_out_with_its_closure():
+    unit = Curve((Segment(1.0, math.pi / 2), Segment(-1.0, math.pi / 4)), (SMOOTH,), repeat=4,
+                 closing=Join("cusp", math.radians(-45.0)))
+    r = unit.with_rests([3])
+    assert r.repeat == 1 and len(r.pieces) == 8
+    assert [p.start for p in r.layout()] == [p.start for p in unit.layout()]
+    assert r.closure() == pytest.approx(unit.closure())
+    assert len(r.sections()) == len(unit.sections()) + 1
+
+
+def test_middle_join_is_nearest_half_the_length():
+    sec = _s_curve().sections()[0]  # lengths 1, 2, 0.5, 1.5: half is 2.5, joins at 1, 3, 3.5
+    assert middle_join(sec) == 2
+    single = Curve((Segment(1.0, 1.0),)).sections()[0]
+    assert middle_join(single) is None
+
+
+def test_auto_splits_failing_sections_and_those_before_them(monkeypatch):
+    # A stand-in verification that fails every section of more than one piece: the loop must halve
+    # sections (and the ones before a failing one) until each is a single piece, then pass.
+    fig = Figure("s", (_s_curve(),))
+
+    def fake_verify(trace, schedule, rel_tol):
+        secs = [{"passed": len(s.section.pieces) == 1} for s in trace.sections]
+        ok = all(s["passed"] for s in secs)
+        return SimpleNamespace(success=ok, sections=secs, message="ok" if ok else "too far")
+
+    monkeypatch.setattr(rests_module, "verify", fake_verify)
+    monkeypatch.setattr(rests_module, "schedule_from_trace", lambda trace: (None, {}))
+    res = trace_and_verify(fig, rests="auto")
+    assert res.success and res.rounds == 3
+    assert sorted(res.rests) == [(0, 1), (0, 2), (0, 3)]
+    assert [len(s.pieces) for s in res.figure.curves[0].sections()] == [1, 1, 1, 1]
+    never = trace_and_verify(fig, rests="never")
+    assert not never.success and never.rests == () and never.rounds == 1
+    capped = trace_and_verify(fig, rests="auto", max_rounds=0)
+    assert not capped.success and capped.rounds == 1
+
+
+def test_bad_policy_is_refused():
+    fig = Figure("s", (_s_curve(),))
+    with pytest.raises(ValueError, match="auto, never, joins"):
+        trace_and_verify(fig, rests="sometimes")
+
+
+def test_a_launch_back_through_a_whole_circle_fails_and_a_rest_at_the_waist_fixes_it():
+    # A figure eight of two 1.5 m circles for a real skater (SI units), the second circle longer by
+    # 1e-9 so that the glide lies on it: the launch then runs back through the whole first circle,
+    # and the open-loop replay strays by 1e-5 m (tolerance 6e-6) and ends at 3e-7 m/s. With a
+    # rest at the waist both circles are launched and stopped within themselves.
+    R = 1.5
+    segs = (Segment(1 / R, 2 * math.pi * R), Segment(-1 / R, 2 * math.pi * R * (1 + 1e-9)))
+    fig = Figure("eight", (Curve(segs, (SMOOTH,)),), skater_params())
+    opts = TraceOptions(speed=2.0)
+    never = trace_and_verify(fig, options=opts, rests="never")
+    assert never.trace.success and not never.report.success
+    auto = trace_and_verify(fig, options=opts, rests="auto")
+    assert auto.success and auto.rests == ((0, 1),) and auto.rounds == 2
+    assert auto.report.max_deviation < 1e-2 * auto.report.tolerance  # 6e-9 m measured
+    assert auto.report.max_cusp_speed < 1e-8 * opts.speed
+    joins = trace_and_verify(fig, options=opts, rests="joins")
+    assert joins.rests == ((0, 1),) and joins.rounds == 1 and joins.success
+    np.testing.assert_allclose(joins.report.max_deviation, auto.report.max_deviation, rtol=1e-6)
