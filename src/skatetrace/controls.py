@@ -75,7 +75,7 @@ class ControlSchedule:
         return f
 
 
-def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-12, rate_tol: float = 1e-10,
+def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-11, rate_tol: float = 1e-9,
                       n0: int = 16, max_points: int = 200_000, min_step: float = 1e-7) -> np.ndarray:
     """Times on ``[t0, t1]`` at which Hermite interpolation of ``fn`` meets the tolerances.
 

@@ -159,8 +159,8 @@ def solve_stop(
     speed: float,
     *,
     backward: bool = False,
-    rtol: float = 1e-12,
-    atol: float = 1e-13,
+    rtol: float = 1e-13,
+    atol: float = 1e-14,
     singular_limit: float = 1e-3,
 ) -> ManeuverSolution:
     """Bring a glide to rest (or, with ``backward=True``, start it from rest).

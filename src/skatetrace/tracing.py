@@ -77,8 +77,8 @@ class TraceOptions:
     residual_tol: float = 1e-10
     singular_limit: float = 1e-3
     excursion_limit: float = 20.0
-    rtol: float = 1e-12
-    atol: float = 1e-13
+    rtol: float = 1e-13
+    atol: float = 1e-14
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.speed) and self.speed > 0):
