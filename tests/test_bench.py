@@ -20,3 +20,10 @@ def test_bench_paper_arcs_small(capsys):
         assert r["exact_success"] and r["exact_residual"] <= 1e-10 and r["exact_end_speed"] <= 1e-10
         assert r["ratio"] > 0 and r["baseline_residual"] >= 0
     assert "ratio" in capsys.readouterr().out
+
+
+def test_bench_school_small(capsys):
+    rows = _load("bench_school").main(["circle-eight"])
+    assert rows[0]["figure"] == "circle-eight" and rows[0]["success"]
+    assert rows[0]["deviation"] <= rows[0]["tolerance"]
+    assert "circle-eight" in capsys.readouterr().out
