@@ -119,3 +119,10 @@ def test_dense_solution_pickles_and_evaluates_scalars():
     assert sol(-1.5).shape == (5,)
     np.testing.assert_allclose(sol(0.0), _glide(0.5), atol=1e-15)
     np.testing.assert_allclose(sol(-3.0), res.y, atol=1e-15)
+
+
+def test_a_failed_dense_run_reports_where_it_stopped():
+    res = integrate_legs(P, _glide(1 / 1.2), [1 / 1.2, -0.5], [1.0, math.inf], 0.05, 50.0, rtol=RTOL, atol=ATOL,
+                         max_nfev=300, dense=True)
+    assert res.status < 0 and res.legs == ()
+    assert res.leg_bounds[-1] == res.t and np.all(np.isfinite(res.leg_bounds))

@@ -395,7 +395,7 @@ class IntegrationResult:
     ``status`` is 0 (reached ``t_end``, or the last join with no leg after it), ``"stopped"`` or
     ``"singular"`` for a terminal event, or a negative code for a failure (see ``message``).
     ``leg_bounds`` are the times at which each leg started and the last one ended; ``legs`` the
-    dense solutions (``dense=True`` only), one per leg entered.
+    dense solutions (``dense=True`` and no failure only), one per leg entered.
     """
 
     status: int
@@ -445,7 +445,9 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
             DenseSolution(st[:ns][sel], sh[:ns][sel], sy[:ns][sel], sF[:ns][sel])
             for sel in (sleg[:ns] == k for k in range(nlegs))
         )
+    bounds = np.array(bounds[:nlegs + 1])
+    bounds[-1] = t  # where the last leg entered ended (unset by a failure)
     hit = {_STOPPED: "stopped", _SINGULAR: "singular"}.get(int(status))
     code = 0 if status >= 0 else int(status)
     return IntegrationResult(status=code, hit=hit, message=_MESSAGES[int(status)], t=float(t), y=np.asarray(yf),
-                             leg_bounds=np.asarray(bounds[:nlegs + 1]), legs=legs)
+                             leg_bounds=bounds, legs=legs)

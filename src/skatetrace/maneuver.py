@@ -128,7 +128,7 @@ def _integrate(params, y0, legs_spec, alpha, t_end, *, rtol, atol, stop=False, s
                          rtol=rtol, atol=atol, stop_event=stop, singular_limit=singular_limit,
                          max_nfev=_MAX_EVALUATIONS, dense=dense)
     bounds = res.leg_bounds
-    legs = [Leg(float(legs_spec[i][0]), float(bounds[i]), float(bounds[i + 1]), res.legs[i] if dense else None)
+    legs = [Leg(float(legs_spec[i][0]), float(bounds[i]), float(bounds[i + 1]), res.legs[i] if res.legs else None)
             for i in range(res.nlegs)]
     return legs, res.status, res.t, res.y, res.hit
 
@@ -252,6 +252,8 @@ def solve_stop(
             continue
         (alpha, tau), res = sol[0], sol[1]
         legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol)
+        if status != 0 or len(legs) < len(legs_spec):
+            continue  # the dense re-run did not get through: no usable solution from this bracket
         dist = _min_singular_distance(params, legs)
         if best is None or dist > best[3]:
             best = (alpha, tau, legs, dist, res)
