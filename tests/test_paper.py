@@ -497,3 +497,18 @@ def test_evaluation_to_dict_is_json_serialisable(published, exact):
         assert "series" not in d and "full" not in d
     assert published["main-arc2"].to_dict()["values"] == (-0.343, 1.369)
     assert exact["main-arc2"].to_dict()["regularity_margin"] is None
+
+
+def test_printed_bdot_diverges_at_the_second_singular_line():
+    # (b - b*) bdot tends to (I + m a^2 + r M b*)(p2 - m adot) / (m^2 a) at b* = (M + m) r / m: the
+    # numerator of (b_diff_eq) at b* factors so; it vanishes only at rest (p2 = m adot) or a = 0
+    from skatetrace.paper.controls import b_rate_printed
+
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        r = rng.uniform(0.5, 3.0)
+        p1, p2, a, adot = rng.normal(size=4)
+        b_star = (P.M + P.m) * r / P.m
+        limit = (P.I + P.m * a * a + r * P.M * b_star) * (p2 - P.m * adot) / (P.m**2 * a)
+        got = 1e-7 * b_rate_printed(P, r, p1, p2, a, adot, b_star + 1e-7)
+        assert got == pytest.approx(limit, rel=1e-5)

@@ -91,7 +91,7 @@ def test_a_launch_back_through_a_whole_circle_fails_and_a_rest_at_the_waist_fixe
     R = 1.5
     segs = (Segment(1 / R, 2 * math.pi * R), Segment(-1 / R, 2 * math.pi * R * (1 + 1e-9)))
     fig = Figure("eight", (Curve(segs, (SMOOTH,)),), skater_params())
-    opts = TraceOptions(speed=2.0)
+    opts = TraceOptions(speed=2.0, placement="first")  # the default picks a placement that needs no rest
     never = trace_and_verify(fig, options=opts, rests="never")
     assert never.trace.success and not never.report.success
     auto = trace_and_verify(fig, options=opts, rests="auto")
@@ -107,3 +107,22 @@ def test_a_launch_back_through_a_whole_circle_fails_and_a_rest_at_the_waist_fixe
     joins = trace_and_verify(fig, options=opts, rests="joins")
     assert joins.rests == ((0, 1),) and joins.rounds == 1 and joins.success
     np.testing.assert_allclose(joins.report.max_deviation, auto.report.max_deviation, rtol=1e-6)
+
+
+def test_least_reach_placement_keeps_the_mass_closer_than_the_first_that_works():
+    # the school three's second section (turn, then the long arc) for a 1.7 m skater: the first
+    # placement that works glides on the long arc with the mass 33 m from the blade; launching
+    # straight into the stop at the turn keeps it within 1.3 m
+    from skatetrace.school import school_figure
+    from skatetrace.tracing import trace_section
+
+    sec = school_figure("three", height=1.7).curves[0].sections()[1]
+    params = skater_params(height=1.7)
+    first = trace_section(params, sec, TraceOptions(speed=2.0, placement="first"))
+    least = trace_section(params, sec, TraceOptions(speed=2.0))
+    reach = [max(t.metrics["max_abs_a"], t.metrics["max_abs_b"]) for t in (first, least)]
+    assert first.success and least.success
+    assert reach[1] < 0.1 * reach[0], reach  # measured 32.6 m and 1.24 m
+    assert least.nfev > first.nfev  # every placement was tried
+    with pytest.raises(ValueError, match="placement"):
+        TraceOptions(placement="best")

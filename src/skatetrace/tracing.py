@@ -18,7 +18,7 @@ A section traversed backwards (after a reversal) is solved forwards and mapped b
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 from typing import Any
 
@@ -69,6 +69,9 @@ class TraceOptions:
         ``max(sqrt(I/(M+m)), section length)``. Beyond it a solution is numerically meaningless.
     rtol, atol : float
         Integration tolerances of the manoeuvres.
+    placement : {"least-reach", "first"}
+        Which of the glide placements that trace the section to keep: the one whose mass stays
+        closest to the blade (default; every placement is tried) or the first that works.
     """
 
     speed: float = 1.0
@@ -79,12 +82,15 @@ class TraceOptions:
     excursion_limit: float = 20.0
     rtol: float = 1e-13
     atol: float = 1e-14
+    placement: str = "least-reach"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.speed) and self.speed > 0):
             raise ValueError(f"speed must be positive and finite, got {self.speed!r}")
         if self.maneuver_length is not None and not (math.isfinite(self.maneuver_length) and self.maneuver_length > 0):
             raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
+        if self.placement not in ("least-reach", "first"):
+            raise ValueError(f"placement must be 'least-reach' or 'first', got {self.placement!r}")
         for name in ("residual_tol", "singular_limit", "excursion_limit", "rtol", "atol"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
@@ -342,14 +348,17 @@ def trace_section(
     """Find controls that trace ``section`` exactly from rest to rest.
 
     The glide is placed on each segment in turn (longest first) and at each candidate mass
-    position (:func:`_glide_candidates`) until a stop and a launch are both found. Never raises for
-    a section that cannot be traced: the result has ``success=False`` and the reason.
+    position (:func:`_glide_candidates`). Of the placements whose stop and launch are both found
+    and pass every check, the one whose mass stays closest to the blade is kept (least largest
+    ``|a|, |b|``, then least peak kinetic energy of the mass); with ``options.placement="first"``
+    the first is. Never raises for a section that cannot be traced: the result has
+    ``success=False`` and the reason.
     """
     segs = section.segments
     order = sorted(range(len(segs)), key=lambda i: -segs[i].length)
     kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
     nfev = attempts = 0
-    first_failure = None
+    first_failure = best = None
     for g in order:
         kg, Lg = segs[g]
         ell = options.maneuver_length or _auto_maneuver_length(params, kg, Lg)
@@ -368,8 +377,15 @@ def trace_section(
             attempts += 1
             attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
             if attempt.success:
-                return attempt
+                if options.placement == "first":
+                    return attempt
+                key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
+                if best is None or key < best[0]:
+                    best = (key, attempt)
+                continue
             first_failure = first_failure or attempt
+    if best is not None:
+        return replace(best[1], nfev=nfev)
     return SectionTrace(
         success=False, status=first_failure.status,
         message=first_failure.message + f" (tried {attempts} glide placements: every segment as the glide, "
@@ -377,6 +393,11 @@ def trace_section(
         curve_index=curve_index, section=section, params=params, speed=options.speed, glide=first_failure.glide,
         residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=nfev,
     )  # no phases: controls that failed a check are not handed on to be written or replayed
+
+
+def _reach(trace: SectionTrace) -> float:
+    """Largest distance of the mass from the contact point along the blade or across it."""
+    return max(trace.metrics["max_abs_a"], trace.metrics["max_abs_b"])
 
 
 def _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev) -> SectionTrace:
