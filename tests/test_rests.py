@@ -126,3 +126,16 @@ def test_least_reach_placement_keeps_the_mass_closer_than_the_first_that_works()
     assert least.nfev > first.nfev  # every placement was tried
     with pytest.raises(ValueError, match="placement"):
         TraceOptions(placement="best")
+
+
+def test_search_bounds_the_placements_tried_after_the_first_that_works():
+    from skatetrace.school import school_figure
+    from skatetrace.tracing import trace_section
+
+    sec = school_figure("three", height=1.7).curves[0].sections()[1]
+    params = skater_params(height=1.7)
+    first = trace_section(params, sec, TraceOptions(speed=2.0, placement="first"))
+    none_more = trace_section(params, sec, TraceOptions(speed=2.0, search=0))
+    assert none_more.glide == first.glide and none_more.nfev == first.nfev
+    with pytest.raises(ValueError, match="search"):
+        TraceOptions(search=-1)

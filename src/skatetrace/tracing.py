@@ -71,7 +71,11 @@ class TraceOptions:
         Integration tolerances of the manoeuvres.
     placement : {"least-reach", "first"}
         Which of the glide placements that trace the section to keep: the one whose mass stays
-        closest to the blade (default; every placement is tried) or the first that works.
+        closest to the blade (default) or the first that works.
+    search : int
+        With ``"least-reach"``: how many more placements to try after the first that works (in
+        the order of :func:`trace_section`). Sections of a few pieces have fewer placements than
+        this and are searched completely; a fitted drawing's long section is not.
     """
 
     speed: float = 1.0
@@ -83,12 +87,15 @@ class TraceOptions:
     rtol: float = 1e-13
     atol: float = 1e-14
     placement: str = "least-reach"
+    search: int = 16
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.speed) and self.speed > 0):
             raise ValueError(f"speed must be positive and finite, got {self.speed!r}")
         if self.maneuver_length is not None and not (math.isfinite(self.maneuver_length) and self.maneuver_length > 0):
             raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
+        if not (isinstance(self.search, int) and self.search >= 0):
+            raise ValueError(f"search must be a whole number >= 0, got {self.search!r}")
         if self.placement not in ("least-reach", "first"):
             raise ValueError(f"placement must be 'least-reach' or 'first', got {self.placement!r}")
         for name in ("residual_tol", "singular_limit", "excursion_limit", "rtol", "atol"):
@@ -349,15 +356,15 @@ def trace_section(
 
     The glide is placed on each segment in turn (longest first) and at each candidate mass
     position (:func:`_glide_candidates`). Of the placements whose stop and launch are both found
-    and pass every check, the one whose mass stays closest to the blade is kept (least largest
-    ``|a|, |b|``, then least peak kinetic energy of the mass); with ``options.placement="first"``
-    the first is. Never raises for a section that cannot be traced: the result has
-    ``success=False`` and the reason.
+    and pass every check (the first that works and up to ``options.search`` tried after it), the
+    one whose mass stays closest to the blade is kept (least largest ``|a|, |b|``, then least peak
+    kinetic energy of the mass); with ``options.placement="first"`` the first is. Never raises for
+    a section that cannot be traced: the result has ``success=False`` and the reason.
     """
     segs = section.segments
     order = sorted(range(len(segs)), key=lambda i: -segs[i].length)
     kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
-    nfev = attempts = 0
+    nfev = attempts = extra = 0
     first_failure = best = None
     for g in order:
         kg, Lg = segs[g]
@@ -376,14 +383,20 @@ def trace_section(
             nfev += stop.nfev + (launch.nfev if launch else 0)
             attempts += 1
             attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
+            if best is not None:
+                extra += 1
             if attempt.success:
                 if options.placement == "first":
                     return attempt
                 key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
                 if best is None or key < best[0]:
                     best = (key, attempt)
-                continue
-            first_failure = first_failure or attempt
+            else:
+                first_failure = first_failure or attempt
+            if best is not None and extra >= options.search:
+                break
+        if best is not None and extra >= options.search:
+            break
     if best is not None:
         return replace(best[1], nfev=nfev)
     return SectionTrace(
