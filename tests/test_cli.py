@@ -95,3 +95,15 @@ def test_example_figure_traces_end_to_end(tmp_path):
     result = json.loads((out / "result.json").read_text())
     assert result["curves"][0]["closure"]["closed"]
     assert len(result["sections"]) == 8 and all(s["success"] for s in result["sections"])
+
+
+def test_rests_at_every_join_keep_the_path_and_are_reported(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "o"
+    assert main(["trace", "s-bend", "--rests", "joins", "--out", str(out), "--no-plots"]) == 0
+    text = capsys.readouterr().out
+    assert "note: rests added at smooth joins (before piece 1, before piece 2)" in text
+    curve = json.loads((out / "result.json").read_text())["figure"]["curves"][0]
+    assert curve["joins"] == [{"type": "cusp", "pivot_deg": 0.0}] * 2
+    assert main(["trace", "s-bend", "--rests", "sometimes", "--out", str(out)]) == 2

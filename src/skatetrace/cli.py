@@ -166,7 +166,7 @@ def _trace(args) -> int:
     if done.rests:
         where = ", ".join(f"before piece {pi}" + (f" of curve {ci}" if len(figure.curves) > 1 else "")
                           for ci, pi in done.rests)
-        print(f"note: rests added at smooth joins ({where}): the replay of the longer sections strayed "
+        print(f"note: rests added at smooth joins ({where}): sections failed to trace or their replay strayed "
               f"more than allowed; {done.rounds} trace-and-verify rounds")
     out = Path(args.out)
     write_results(out, trace, schedule, states, report)

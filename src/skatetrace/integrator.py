@@ -205,6 +205,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
     f_new = np.empty(n)
     g_old = np.empty(3)
     g_new = np.empty(3)
+    F_none = np.zeros((_POWER, n))  # stands for "no dense output" on steps that need none
     for leg in range(nlegs):
         kappa = kappas[leg]
         switch = switches[leg]
@@ -295,7 +296,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
             for e in range(3):
                 if (g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0):
                     active = True
-            F = np.empty((_POWER, n))
+            F = F_none
             if dense or active:
                 F = _dense_coefficients(M, m, I, kappa, alpha, t, h, y, ynew, f_new, K)
                 nfev += 3
