@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import io as _io
 import json
+from dataclasses import asdict
 import math
 import os
 import tempfile
@@ -97,10 +98,7 @@ def result_dict(trace: FigureTrace) -> dict[str, Any]:
         "schema": SCHEMA_VERSION,
         "success": trace.success, "status": trace.status, "message": trace.message,
         "params": trace.params.to_dict(),
-        "options": {"speed": trace.options.speed, "maneuver_length": trace.options.maneuver_length,
-                    "glide_lateral": trace.options.glide_lateral, "residual_tol": trace.options.residual_tol,
-                    "singular_limit": trace.options.singular_limit,
-                    "excursion_limit": trace.options.excursion_limit},
+        "options": asdict(trace.options),  # every setting of the tracer, so that a run can be repeated
         "figure": trace.figure.to_dict(),
         "curves": curves,
         "duration": trace.duration,
