@@ -80,9 +80,9 @@ def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-11, rat
     """Times on ``[t0, t1]`` at which Hermite interpolation of ``fn`` meets the tolerances.
 
     ``fn(t)`` returns ``(a, b, adot, bdot)`` arrays. Every interval is bisected until the cubic
-    Hermite interpolant of its end values and rates agrees at its midpoint with ``fn`` to
-    ``value_tol`` times the largest ``|a|, |b|`` and, for the derivative, to ``rate_tol`` times
-    the largest rate (relative tolerances, so that metres and model units sample alike). No
+    Hermite interpolant of its end values and rates agrees with ``fn`` at its midpoint to
+    ``value_tol`` times the largest ``|a|, |b|``, and its derivative at its first quarter to
+    ``rate_tol`` times the largest rate (relative tolerances, so that metres and model units sample alike). No
     interval is made shorter than ``min_step`` times the span. Only the midpoints of unfinished
     intervals are evaluated, so the cost is linear in the result.
     """

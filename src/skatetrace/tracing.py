@@ -364,39 +364,41 @@ def trace_section(
     segs = section.segments
     order = sorted(range(len(segs)), key=lambda i: -segs[i].length)
     kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
+
+    def placements():
+        for g in order:
+            kg, Lg = segs[g]
+            ell = min(options.maneuver_length or _auto_maneuver_length(params, kg, Lg), 0.5 * Lg)
+            for glide_ab, steady in _glide_candidates(params, segs, g, ell, options):
+                yield g, kg, Lg, ell, glide_ab, steady
+
     nfev = attempts = extra = 0
     first_failure = best = None
-    for g in order:
-        kg, Lg = segs[g]
-        ell = options.maneuver_length or _auto_maneuver_length(params, kg, Lg)
-        ell = min(ell, 0.5 * Lg)
-        for glide_ab, steady in _glide_candidates(params, segs, g, ell, options):
-            # an instant apex is no glide: the launch and the stop share the whole segment
-            ell_g = ell if steady else 0.5 * Lg
-            before = [(kg, ell_g)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
-            after = [(kg, ell_g)] + [(s.curvature, s.length) for s in segs[g + 1:]]
-            glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
-                     "kappa": kg, "speed": options.speed}
-            with np.errstate(divide="ignore", invalid="ignore"):
-                stop = solve_stop(params, after, glide_ab, 1.0, **kw)
-                launch = solve_stop(params, before, glide_ab, 1.0, backward=True, **kw) if stop.success else None
-            nfev += stop.nfev + (launch.nfev if launch else 0)
-            attempts += 1
-            attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
-            if best is not None:
-                extra += 1
-            if attempt.success:
-                if options.placement == "first":
-                    return attempt
-                key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
-                if best is None or key < best[0]:
-                    best = (key, attempt)
-            else:
-                first_failure = first_failure or attempt
-            if best is not None and extra >= options.search:
+    for g, kg, Lg, ell, glide_ab, steady in placements():
+        if best is not None:
+            if extra >= options.search:
                 break
-        if best is not None and extra >= options.search:
-            break
+            extra += 1
+        # an instant apex is no glide: the launch and the stop share the whole segment
+        ell_g = ell if steady else 0.5 * Lg
+        before = [(kg, ell_g)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
+        after = [(kg, ell_g)] + [(s.curvature, s.length) for s in segs[g + 1:]]
+        glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
+                 "kappa": kg, "speed": options.speed}
+        with np.errstate(divide="ignore", invalid="ignore"):
+            stop = solve_stop(params, after, glide_ab, 1.0, **kw)
+            launch = solve_stop(params, before, glide_ab, 1.0, backward=True, **kw) if stop.success else None
+        nfev += stop.nfev + (launch.nfev if launch else 0)
+        attempts += 1
+        attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
+        if not attempt.success:
+            first_failure = first_failure or attempt
+        elif options.placement == "first":
+            return attempt
+        else:
+            key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
+            if best is None or key < best[0]:
+                best = (key, attempt)
     if best is not None:
         return replace(best[1], nfev=nfev)
     return SectionTrace(
