@@ -12,8 +12,8 @@ same) splits the section in two, each with shorter manoeuvres.
 section fails (not traced, replay too far from the figure, or not at rest at its ends) adds a
 rest at the smooth join nearest the middle of it and of every section before it on its curve
 (the replay carries errors from one section into the next), then traces and verifies again,
-until everything passes or no such section has a smooth join left. ``rests="never"`` traces the figure as
-given, ``rests="joins"`` rests at every smooth join.
+until everything passes or no such section has a smooth join left. ``rests="never"`` traces the
+figure as given, ``rests="joins"`` rests at every smooth join.
 """
 
 from __future__ import annotations
@@ -107,8 +107,8 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     ----------
     rests : {"auto", "never", "joins"}
         ``"auto"`` (default) adds a rest in the middle of each failing section and of the
-        sections before it on its curve, and tries again, at most ``max_rounds`` times; ``"never"`` traces the figure as given; ``"joins"`` rests
-        at every smooth join.
+        sections before it on its curve, and tries again, at most ``max_rounds`` times;
+        ``"never"`` traces the figure as given; ``"joins"`` rests at every smooth join.
     rel_tol : float
         Verification tolerance as a fraction of the figure's size (:func:`~skatetrace.verify.verify`).
     progress : callable, optional
