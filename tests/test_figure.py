@@ -135,8 +135,14 @@ def test_arc_turn_defaults_to_left():
         (one_curve(pieces=[{"type": "arc", "radius": "1", "sweep_deg": 9}]), r"'radius' must be a finite"),
         (one_curve(pieces=[{"type": "arc", "radius": 1.0}]), r"'sweep_deg' or 'length'"),
         (one_curve(pieces=[{"type": "arc", "radius": 1.0, "length": 1.0, "turn": "up"}]), r"turn must be"),
-        (one_curve(pieces=[{"type": "spiral", "length": 1.0}]),
-         r"curves\[0\]\.pieces\[0\].*piece type must be 'arc' or 'line', got 'spiral'"),
+        (one_curve(pieces=[{"type": "clothoid", "length": 1.0}]),
+         r"curves\[0\]\.pieces\[0\].*piece type must be 'arc', 'line' or 'spiral', got 'clothoid'"),
+        (one_curve(pieces=[{"type": "spiral", "length": 1.0}]), r"a spiral needs 'curvature', a list of 1 to 4"),
+        (one_curve(pieces=[{"type": "spiral", "curvature": [1, 2, 3, 4, 5], "length": 1.0}]), r"1 to 4"),
+        (one_curve(pieces=[{"type": "spiral", "curvature": [1, float("inf")], "length": 1.0}]),
+         r"'curvature' must be a finite"),
+        (one_curve(pieces=[{"type": "spiral", "curvature": [1, 2]}]), r"a spiral needs a 'length'"),
+        (one_curve(pieces=[{"type": "spiral", "curvature": [1, 2], "length": -1.0}]), r"length must be positive"),
         (one_curve(pieces=[{"length": 1.0}]), r"expected an object with 'type'"),
         (one_curve(pieces=[{"type": "line", "length": 1.0}] * 2, joins=[]), r"2 pieces need 1 joins, got 0"),
         (one_curve(pieces=[{"type": "line", "length": 1.0}] * 2, joins=[{"type": "cusp"}] * 3),
@@ -323,3 +329,23 @@ def test_reversal_from_json_and_direction_restored():
     assert cl["position_gap"] == pytest.approx(0.0, abs=1e-14)
     assert abs(cl["heading_gap"]) == pytest.approx(math.pi, abs=1e-14)
     assert cl["closed"] is False
+
+
+def test_spiral_pieces_round_trip_and_lay_out_continuously():
+    from skatetrace.geometry import Spiral, end_pose
+
+    data = {"curves": [{"pieces": [{"type": "spiral", "curvature": [0.2, 0.3], "length": 2.0},
+                                   {"type": "arc", "curvature": 0.8, "length": 1.5},
+                                   {"type": "spiral", "curvature": [0.8, -0.2, 0.01, 0.001], "length": 3.0}],
+                        "joins": [{"type": "smooth"}, {"type": "smooth"}]}]}
+    fig = figure_from_dict(data)
+    c = fig.curves[0]
+    assert c.pieces[0] == Spiral((0.2, 0.3, 0.0, 0.0), 2.0)  # short coefficient lists are padded
+    back = figure_from_dict(json.loads(json.dumps(fig.to_dict())))
+    assert back.curves[0].pieces == c.pieces
+    placed = c.layout()
+    for p, q in zip(placed[:-1], placed[1:]):
+        assert tuple(end_pose(p.start, p.segment)) == pytest.approx(tuple(q.start), abs=1e-13)
+    # merging equal arcs leaves spirals alone
+    assert c.merged().pieces == c.pieces
+    assert fig.size() > 0

@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from skatetrace.geometry import Pose, Segment, advance, distance_to_segment, rigid_motion_centre, segment_points
+from skatetrace.geometry import (Pose, Segment, Spiral, advance, distance_to_segment, end_pose, rigid_motion_centre,
+                                 segment_points, shifted_polynomial, travel)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -190,3 +191,77 @@ def test_rigid_motion_centre_none_for_translation(turns):
     start = Pose(0.0, 0.0, 0.4)
     end = Pose(3.0, -1.0, 0.4 + 2 * math.pi * turns)
     assert rigid_motion_centre(start, end) is None
+
+
+# --------------------------------------------------------------------------------------------------
+# spirals (curvature a cubic of arc length)
+# --------------------------------------------------------------------------------------------------
+def test_clothoid_matches_fresnel_integrals():
+    from scipy.special import fresnel
+
+    # kappa = s: x = sqrt(pi) C(s / sqrt(pi)), y = sqrt(pi) S(s / sqrt(pi)) (Abramowitz & Stegun 7.3)
+    s = np.linspace(0.0, 5.0, 51)
+    x, y, th = travel(Pose(0.0, 0.0, 0.0), Spiral((0.0, 1.0, 0.0, 0.0), 5.0), s)
+    S, C = fresnel(s / math.sqrt(math.pi))
+    np.testing.assert_allclose(x, math.sqrt(math.pi) * C, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(y, math.sqrt(math.pi) * S, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(th, 0.5 * s**2, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("coeffs", [(0.3, -0.2, 0.05, 0.01), (-1.0, 0.0, 0.4, -0.06), (2.0, 0.0, 0.0, 0.0)])
+def test_spiral_agrees_with_integrated_ode(coeffs):
+    pose = Pose(0.5, -1.0, 2.0)
+    sp = Spiral(coeffs, 6.0)
+
+    def f(s, z):
+        return [math.cos(z[2]), math.sin(z[2]), float(sp.curvature_at(s))]
+
+    s = np.linspace(0.0, 6.0, 37)
+    sol = solve_ivp(f, (0.0, 6.0), list(pose), method="DOP853", rtol=1e-13, atol=1e-13, t_eval=s)
+    x, y, th = travel(pose, sp, s)
+    np.testing.assert_allclose(np.vstack([x, y, th]), sol.y, rtol=0, atol=1e-10)
+    assert sp.turn == pytest.approx(float(sol.y[2, -1] - pose.heading), abs=1e-10)
+
+
+def test_constant_spiral_is_the_arc():
+    pose = Pose(1.0, 2.0, 0.3)
+    s = np.linspace(0.0, 3.0, 13)
+    got = np.array(travel(pose, Spiral((0.5, 0.0, 0.0, 0.0), 3.0), s))
+    want = np.array(advance(pose, 0.5, s))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-14)
+
+
+@given(st.lists(st.floats(-2.0, 2.0), min_size=4, max_size=4), st.floats(0.1, 3.0), st.floats(0.0, 1.0),
+       st.sampled_from([1.0, -1.0]))
+@settings(max_examples=60, deadline=None)
+def test_shifted_polynomial(coeffs, x0, x, sign):
+    p = np.polynomial.Polynomial(coeffs)
+    q = np.polynomial.Polynomial(shifted_polynomial(coeffs, x0, sign))
+    assert q(x) == pytest.approx(p(x0 + sign * x), rel=1e-12, abs=1e-12)
+
+
+def test_spiral_part_continues_the_whole():
+    sp = Spiral((0.2, 0.5, -0.1, 0.02), 4.0)
+    pose = Pose(0.0, 0.0, 0.0)
+    mid = end_pose(pose, sp.part(0.0, 1.5))
+    x, y, th = travel(mid, sp.part(1.5, 4.0), np.array([0.0, 1.0, 2.5]))
+    xw, yw, thw = travel(pose, sp, np.array([1.5, 2.5, 4.0]))
+    np.testing.assert_allclose(np.vstack([x, y, th]), np.vstack([xw, yw, thw]), rtol=0, atol=1e-13)
+
+
+def test_distance_to_spiral_matches_brute_force():
+    sp = Spiral((0.1, 0.6, -0.05, 0.0), 5.0)
+    pose = Pose(-1.0, 0.5, 0.4)
+    dense = segment_points(pose, sp, 200001)
+    pts = np.random.default_rng(3).uniform(-3.0, 4.0, (2, 300))
+    brute = np.min(np.hypot(dense[0][None, :] - pts[0][:, None], dense[1][None, :] - pts[1][:, None]), axis=1)
+    got = distance_to_segment(pts, pose, sp)
+    # the brute force is a polyline of 2e5 points: it over-estimates by at most a few 1e-10
+    assert np.all(got <= brute + 1e-12)
+    np.testing.assert_allclose(got, brute, rtol=0, atol=1e-9)
+
+
+def test_spiral_max_abs_curvature():
+    sp = Spiral((0.0, 3.0, -1.0, 0.0), 4.0)  # kappa = 3s - s^2: peak 2.25 at s = 1.5, -4 at s = 4
+    assert sp.max_abs_curvature() == pytest.approx(4.0)
+    assert Spiral((0.0, 3.0, -1.0, 0.0), 2.0).max_abs_curvature() == pytest.approx(2.25)

@@ -8,8 +8,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from skatetrace.integrator import DenseSolution, _rhs, integrate_legs
-from skatetrace.maneuver import glide_state
-from skatetrace.model import SleighParams
+from skatetrace.maneuver import constrained_rates, glide_state
+from skatetrace.model import SleighParams, velocities
+from skatetrace.model import rhs as model_rhs
 
 P = SleighParams()
 RTOL, ATOL = 1e-12, 1e-13
@@ -126,3 +127,171 @@ def test_a_failed_dense_run_reports_where_it_stopped():
                          max_nfev=300, dense=True)
     assert res.status < 0 and res.legs == ()
     assert res.leg_bounds[-1] == res.t and np.all(np.isfinite(res.leg_bounds))
+
+
+# --- legs of variable (cubic polynomial) curvature -------------------------------------------------
+
+RTOL_POLY = ATOL_POLY = 1e-12
+
+
+def _kappa(coef, s0, s):
+    """Curvature of a leg with coefficients ``coef`` starting at ``|s| = s0``, at arc length ``s``."""
+    sigma = abs(s) - s0
+    return sum(c * sigma ** k for k, c in enumerate(coef))
+
+
+def _ref_fun(coef, s0, alpha):
+    """Independent right-hand side: the model's rates and momenta equations, kappa from ``|s|``."""
+    def f(t, y):
+        p1, p2, a, b, s = y
+        kappa = _kappa(coef, s0, s)
+        ad, bd, n = constrained_rates(P, kappa, p1, p2, a, b, alpha * t)
+        if not n > 0.0:
+            raise FloatingPointError("singular point")
+        dp = model_rhs(P, np.array([p1, p2, 0.0, 0.0, 0.0]), a, b, ad, bd)
+        _xi1, xi2, _eta = velocities(P, p1, p2, a, b, ad, bd)
+        return np.array([dp[0], dp[1], ad, bd, xi2])
+
+    return f
+
+
+def _scipy_poly_legs(coefs, switches, alpha, t_end, y0):
+    """Leg by leg with solve_ivp on :func:`_ref_fun`, each leg's sigma measured from its start."""
+    sols, t0, y, s0 = [], 0.0, y0, 0.0
+    for coef, switch in zip(coefs, switches):
+        events = None
+        if math.isfinite(switch):
+            def join(t, y, _s=switch):
+                return abs(y[4]) - _s
+            join.terminal = True
+            events = [join]
+        sol = solve_ivp(_ref_fun(coef, s0, alpha), (t0, t_end), y, method="DOP853", rtol=RTOL_POLY,
+                        atol=ATOL_POLY, dense_output=True, events=events)
+        assert sol.status >= 0, sol.message
+        sols.append(sol)
+        if sol.status == 1:
+            t0, y, s0 = sol.t[-1], sol.y[:, -1], switch
+            continue
+        break
+    return sols
+
+
+_POLY_CASES = {
+    "clothoid": ([[0.3, 0.2, 0.0, 0.0]], [math.inf]),
+    "cubic": ([[0.5, -0.3, 0.1, -0.02]], [math.inf]),
+    "constant_then_cubic": ([[1 / 1.2, 0.0, 0.0, 0.0], [-0.5, 0.4, -0.1, 0.05]], [1.0, math.inf]),
+    "three_polynomial_legs": ([[0.3, 0.2, 0.0, 0.0], [-0.5, 0.4, -0.1, 0.05], [0.2, -0.1, 0.03, -0.01]],
+                              [1.0, 2.2, math.inf]),
+}
+
+
+def _leg_starts(switches):
+    return [0.0] + list(switches[:-1])
+
+
+@pytest.mark.parametrize("t_end", [4.0, -4.0])
+@pytest.mark.parametrize("case", list(_POLY_CASES))
+def test_polynomial_curvature_matches_solve_ivp(case, t_end):
+    coefs, switches = _POLY_CASES[case]
+    alpha = 0.05
+    y0 = _glide(coefs[0][0])
+    res = integrate_legs(P, y0, np.array(coefs), switches, alpha, t_end, rtol=RTOL_POLY, atol=ATOL_POLY, dense=True)
+    ref = _scipy_poly_legs(coefs, switches, alpha, t_end, y0)
+    assert res.status == 0 and res.hit is None
+    assert res.nlegs == len(ref) == len(coefs)
+    assert res.t == t_end and ref[-1].t[-1] == t_end
+    if t_end < 0:
+        assert res.y[4] < -switches[-2] if len(switches) > 1 else res.y[4] < 0.0  # s runs negative
+    scale = max(np.abs(sol.y).max() for sol in ref)
+    np.testing.assert_allclose(res.y, ref[-1].y[:, -1], rtol=0.0, atol=1e-9 * scale)
+    for i, sol in enumerate(ref):
+        # join times (and the final time)
+        assert res.leg_bounds[i] == pytest.approx(sol.t[0], abs=1e-9 * abs(t_end))
+        assert res.leg_bounds[i + 1] == pytest.approx(sol.t[-1], abs=1e-9 * abs(t_end))
+        tt = np.linspace(res.leg_bounds[i], res.leg_bounds[i + 1], 13)
+        np.testing.assert_allclose(res.legs[i](tt), sol.sol(tt), rtol=0.0, atol=1e-9 * scale)
+        # the same initial step as scipy's on every leg (it samples the RHS a little way along the leg)
+        h_first = res.legs[i].h[0] if t_end > 0 else res.legs[i].h[-1]
+        assert h_first == pytest.approx(sol.t[1] - sol.t[0], rel=1e-9)
+    for i, sw in enumerate(switches[:-1]):
+        assert abs(res.legs[i](res.leg_bounds[i + 1])[4]) == pytest.approx(sw, abs=1e-12)
+    # the curvature really varies along the polynomial legs (the test is not a constant one in disguise)
+    s_end = abs(res.y[4]) - _leg_starts(switches)[-1]
+    assert s_end > 0.5 and _kappa(coefs[-1], 0.0, s_end) != pytest.approx(coefs[-1][0], abs=0.05)
+
+
+@pytest.mark.parametrize("t_end", [4.0, -4.0])
+@pytest.mark.parametrize("case", ["cubic", "three_polynomial_legs"])
+def test_polynomial_curvature_is_held_along_the_solution(case, t_end):
+    coefs, switches = _POLY_CASES[case]
+    alpha = 0.05
+    res = integrate_legs(P, _glide(coefs[0][0]), coefs, switches, alpha, t_end, rtol=RTOL_POLY, atol=ATOL_POLY,
+                         dense=True)
+    assert res.status == 0 and res.nlegs == len(coefs)
+    for i, (coef, s0) in enumerate(zip(coefs, _leg_starts(switches))):
+        t0, t1 = res.leg_bounds[i], res.leg_bounds[i + 1]
+        tt = np.linspace(t0, t1, 41)[1:-1]  # inside the leg
+        p1, p2, a, b, s = res.legs[i](tt)
+        kappa = _kappa(coef, s0, s)
+        # the rates that hold kappa(|s|) give xi1 = kappa xi2 (algebraically, up to rounding)
+        ad, bd, _n = constrained_rates(P, kappa, p1, p2, a, b, alpha * tt)
+        xi1, xi2, _eta = velocities(P, p1, p2, a, b, ad, bd)
+        assert np.all(np.abs(xi1 - kappa * xi2) <= 1e-12 * (np.abs(xi1) + np.abs(kappa * xi2)))
+        # and the integrated motion follows them: the dense output's own rates (central differences)
+        # give the same xi1 = kappa(|s|) xi2, so the integrator used kappa at the current |s|
+        dt = 1e-5
+        yp, ym = res.legs[i](tt + dt), res.legs[i](tt - dt)
+        ad_fd, bd_fd = (yp[2] - ym[2]) / (2 * dt), (yp[3] - ym[3]) / (2 * dt)
+        np.testing.assert_allclose(ad_fd, ad, rtol=0.0, atol=1e-7 * np.abs(ad).max())
+        np.testing.assert_allclose(bd_fd, bd, rtol=0.0, atol=1e-7 * np.abs(bd).max())
+        xi1_fd, xi2_fd, _eta = velocities(P, p1, p2, a, b, ad_fd, bd_fd)
+        assert np.all(np.abs(xi1_fd - kappa * xi2_fd) <= 1e-7 * np.abs(xi2_fd).max())
+        # the speed along the blade is ds/dt
+        np.testing.assert_allclose((yp[4] - ym[4]) / (2 * dt), xi2, rtol=0.0, atol=1e-7 * np.abs(xi2).max())
+
+
+@pytest.mark.parametrize("t_end", [4.0, -4.0])
+def test_constant_curvature_as_1d_or_zero_padded_2d_is_bit_identical(t_end):
+    y0 = _glide(1 / 1.2)
+    kappas, switches = [1 / 1.2, -0.5, 0.0], [1.0, 2.0, math.inf]
+    padded = np.zeros((3, 4))
+    padded[:, 0] = kappas
+    kw = dict(rtol=RTOL, atol=ATOL, stop_event=True, singular_limit=1e-3, dense=True)
+    r1 = integrate_legs(P, y0, kappas, switches, 0.05, t_end, **kw)
+    r2 = integrate_legs(P, y0, padded, switches, 0.05, t_end, **kw)
+    assert (r1.status, r1.hit, r1.t) == (r2.status, r2.hit, r2.t) and r1.nlegs == r2.nlegs >= 2
+    np.testing.assert_array_equal(r1.y, r2.y)
+    np.testing.assert_array_equal(r1.leg_bounds, r2.leg_bounds)
+    for l1, l2 in zip(r1.legs, r2.legs):
+        for name in ("t_old", "h", "y_old", "F"):
+            np.testing.assert_array_equal(getattr(l1, name), getattr(l2, name))
+
+
+def test_polynomial_leg_singular_event_uses_the_curvature_at_the_current_s():
+    # the singular point (0, -kappa(|s|) I / M) moves along the leg: the event must end at the
+    # distance singular_limit from where it is at the final |s|, not where it was at the leg's start
+    coef = [1.0, 0.2, 0.0, 0.0]
+    for alpha in (-1.0, 1.0):
+        sb0 = -coef[0] * P.I / P.M
+        y0 = np.r_[glide_state(P, coef[0], 0.0, sb0 + 0.05, 1.0), 0.0, sb0 + 0.05, 0.0]
+        res = integrate_legs(P, y0, [coef], [math.inf], alpha, 30.0, rtol=RTOL, atol=ATOL, singular_limit=0.01)
+        if res.hit == "singular":
+            sb = -_kappa(coef, 0.0, res.y[4]) * P.I / P.M
+            assert abs(res.y[4]) > 1e-3  # the point has moved
+            assert math.hypot(res.y[2], res.y[3] - sb) == pytest.approx(0.01, abs=1e-9)
+            return
+    pytest.fail("neither ramp direction reached the singular point's neighbourhood")
+
+
+@pytest.mark.parametrize("kappas, switches", [
+    (np.zeros((2, 3)), [1.0, math.inf]),
+    (np.zeros((2, 4, 1)), [1.0, math.inf]),
+    (np.zeros((2, 5)), [1.0, math.inf]),
+    (0.5, [math.inf]),
+    ([0.5, 0.2], [math.inf]),
+    (np.zeros((2, 4)), [math.inf]),
+    ([], []),
+])
+def test_bad_kappas_shape_raises(kappas, switches):
+    with pytest.raises(ValueError, match="kappas|switches|leg"):
+        integrate_legs(P, _glide(0.5), kappas, switches, 0.05, 1.0, rtol=RTOL, atol=ATOL)

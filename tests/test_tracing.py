@@ -202,3 +202,51 @@ def test_gentle_arcs_and_tiny_lines(seg):
     assert max(sec.metrics["max_abs_a"], sec.metrics["max_abs_b"]) < 5.0
     rep = verify(tr)
     assert rep.success, rep.message
+
+
+# --------------------------------------------------------------------------------------------------
+# spirals: curvature varying along the piece (exact mode)
+# --------------------------------------------------------------------------------------------------
+from skatetrace.figure import SMOOTH  # noqa: E402
+from skatetrace.geometry import Spiral  # noqa: E402
+
+_SPIRAL_SECTIONS = {
+    "clothoid": (Spiral((0.2, 0.3, 0.0, 0.0), 2.0),),
+    "clothoid-arc-cubic": (Spiral((0.2, 0.3, 0.0, 0.0), 2.0), Segment(0.8, 1.5),
+                           Spiral((0.8, -0.4, 0.05, 0.01), 3.0)),
+    "inflection": (Spiral((0.6, -0.5, 0.0, 0.0), 2.4),),
+    "line-into-clothoid": (Segment(0.0, 1.0), Spiral((0.0, 0.5, 0.0, 0.0), 2.0)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(_SPIRAL_SECTIONS))
+def test_spiral_sections_are_traced_exactly(name):
+    pieces = _SPIRAL_SECTIONS[name]
+    fig = Figure(name, (Curve(pieces, (SMOOTH,) * (len(pieces) - 1), name=name),))
+    tr = trace_figure(fig, P)
+    assert tr.success, tr.message
+    sec = tr.sections[0]
+    assert max(sec.residuals.values()) <= 1e-10
+    # the solver's own state obeys xi1 = kappa(s) xi2 with kappa read off the figure's pieces
+    t = np.linspace(0.0, sec.duration, 2001)[1:-1]
+    v = sec.evaluate(t)
+    ends = np.cumsum([p.length for p in pieces])
+    starts = ends - [p.length for p in pieces]
+    kappa = np.array([float(pieces[i].curvature_at(s - starts[i])) for i, s in zip(v["segment"], v["s"])])
+    assert np.max(np.abs(v["xi1"] - kappa * v["xi2"])) <= 1e-9 * np.max(np.abs(v["xi2"]))
+    assert np.all(v["xi2"] > 0)
+    # and the independent replay stays on the spiral
+    rep = verify(tr)
+    assert rep.success, rep.message
+    assert rep.max_deviation <= 1e-7 * fig.size()
+    assert rep.max_cusp_speed <= 1e-8
+    assert all(d["piece"] in [p.index for p in fig.curves[0].layout() if p.segment.constant]
+               for d in rep.invariant_drift)
+
+
+def test_spiral_sections_are_cached_by_shape_not_confused_with_arcs():
+    a = Curve((Spiral((0.5, 0.1, 0.0, 0.0), 1.0),), name="a")
+    b = Curve((Segment(0.5, 1.0),), name="b")
+    tr = trace_figure(Figure("ab", (a, b)), P)
+    assert tr.success, tr.message
+    assert tr.sections[0].phases != tr.sections[1].phases

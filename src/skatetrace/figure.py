@@ -1,4 +1,4 @@
-"""Figures: ordered arcs and lines joined smoothly or at cusps, optionally repeated N-fold.
+"""Figures: ordered arcs, lines and spirals joined smoothly or at cusps, optionally repeated N-fold.
 
 A :class:`Curve` is one stroke on the ice. Consecutive pieces meet at a :class:`Join`:
 
@@ -21,7 +21,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from .errors import FigureFormatError
-from .geometry import Pose, Segment, advance, rigid_motion_centre
+from .geometry import Pose, Segment, Spiral, end_pose, rigid_motion_centre
 from .model import SleighParams
 
 __all__ = ["Join", "Curve", "Figure", "Placed", "Section", "SMOOTH", "figure_from_dict", "load_figure"]
@@ -67,7 +67,7 @@ class Placed:
     """A piece laid out on the ice: where it starts (travel direction) and which way the blade runs."""
 
     index: int  # position in the expanded curve
-    segment: Segment
+    segment: Segment | Spiral
     start: Pose  # start point and direction of travel
     direction: int  # +1 blade runs forwards, -1 backwards (after an odd number of reversals)
     join_before: Join | None  # None for the first piece
@@ -80,7 +80,7 @@ class Section:
     pieces: tuple[Placed, ...]
 
     @property
-    def segments(self) -> list[Segment]:
+    def segments(self) -> list[Segment | Spiral]:
         return [p.segment for p in self.pieces]
 
     @property
@@ -90,9 +90,13 @@ class Section:
 
 @dataclass(frozen=True, slots=True)
 class Curve:
-    """One stroke: pieces, the joins between them, and an optional N-fold repetition."""
+    """One stroke: pieces, the joins between them, and an optional N-fold repetition.
 
-    pieces: tuple[Segment, ...]
+    A piece is a :class:`~skatetrace.geometry.Segment` (arc or line) or a
+    :class:`~skatetrace.geometry.Spiral` (curvature a cubic of arc length).
+    """
+
+    pieces: tuple[Segment | Spiral, ...]
     joins: tuple[Join, ...] = ()
     repeat: int = 1
     closing: Join | None = None
@@ -103,11 +107,14 @@ class Curve:
         if not self.pieces:
             raise FigureFormatError(f"curve {self.name!r} has no pieces")
         for i, seg in enumerate(self.pieces):
+            if not isinstance(seg, (Segment, Spiral)):
+                raise FigureFormatError(f"curve {self.name!r}, piece {i}: expected a Segment or a Spiral, "
+                                        f"got {type(seg).__name__}")
             if not (math.isfinite(seg.length) and seg.length > 0):
                 raise FigureFormatError(
                     f"curve {self.name!r}, piece {i}: length must be positive and finite, got {seg.length!r}"
                 )
-            if not math.isfinite(seg.curvature):
+            if not all(math.isfinite(c) for c in seg.coefficients) or len(seg.coefficients) != 4:
                 raise FigureFormatError(f"curve {self.name!r}, piece {i}: curvature must be finite")
         if len(self.joins) != len(self.pieces) - 1:
             raise FigureFormatError(
@@ -119,9 +126,9 @@ class Curve:
         if self.repeat > 1 and self.closing is None:
             raise FigureFormatError(f"curve {self.name!r}: a repeated curve needs a closing join")
 
-    def expanded(self) -> list[tuple[Segment, Join | None]]:
+    def expanded(self) -> list[tuple[Segment | Spiral, Join | None]]:
         """All pieces of all copies, each with the join before it (``None`` first)."""
-        out: list[tuple[Segment, Join | None]] = []
+        out: list[tuple[Segment | Spiral, Join | None]] = []
         for copy in range(self.repeat):
             for i, seg in enumerate(self.pieces):
                 if i > 0:
@@ -140,13 +147,13 @@ class Curve:
             if join is not None:
                 pose, direction = _apply_join(pose, direction, join)
             placed.append(Placed(i, seg, pose, direction, join))
-            pose = Pose(*(float(v) for v in advance(pose, seg.curvature, seg.length)))
+            pose = end_pose(pose, seg)
         return placed
 
     def end_pose(self) -> tuple[Pose, int]:
         """Pose and blade direction after the last piece and, if repeated, the closing join."""
         last = self.layout()[-1]
-        pose = Pose(*(float(v) for v in advance(last.start, last.segment.curvature, last.segment.length)))
+        pose = end_pose(last.start, last.segment)
         direction = last.direction
         if self.closing is not None:
             pose, direction = _apply_join(pose, direction, self.closing)
@@ -191,10 +198,15 @@ class Curve:
 
         Arc fits of drawn circles come in several arcs of one radius; one piece traces faster and
         the same. Curvatures equal within ``rel_tol`` (relative to the larger) count as equal.
+        Spirals are kept as they are.
         """
         pieces, joins = [self.pieces[0]], []
         for seg, join in zip(self.pieces[1:], self.joins):
             last = pieces[-1]
+            if isinstance(seg, Spiral) or isinstance(last, Spiral):
+                pieces.append(seg)
+                joins.append(join)
+                continue
             same = abs(seg.curvature - last.curvature) <= rel_tol * max(abs(seg.curvature), abs(last.curvature))
             if not join.is_cusp and same:
                 pieces[-1] = Segment(last.curvature, last.length + seg.length)
@@ -285,7 +297,9 @@ def _apply_join(pose: Pose, direction: int, join: Join) -> tuple[Pose, int]:
     return Pose(pose.x, pose.y, heading), (-direction if join.reverse else direction)
 
 
-def _segment_to_dict(seg: Segment) -> dict[str, Any]:
+def _segment_to_dict(seg: Segment | Spiral) -> dict[str, Any]:
+    if isinstance(seg, Spiral):
+        return {"type": "spiral", "curvature": [float(c) for c in seg.coefficients], "length": seg.length}
     if seg.curvature == 0.0:
         return {"type": "line", "length": seg.length}
     return {"type": "arc", "curvature": seg.curvature, "length": seg.length}
@@ -300,17 +314,33 @@ def _number(d: dict, key: str, where: str) -> float:
     return float(value)
 
 
-def _segment_from_dict(d: Any, where: str) -> Segment:
+def _spiral_from_dict(d: dict, where: str) -> Spiral:
+    coeffs = d.get("curvature")
+    if not (isinstance(coeffs, list) and 1 <= len(coeffs) <= 4):
+        raise FigureFormatError(f"{where}: a spiral needs 'curvature', a list of 1 to 4 polynomial coefficients "
+                                f"[c0, c1, c2, c3] of arc length from its start, got {coeffs!r}")
+    values = [_number({"curvature": c}, "curvature", where) for c in coeffs]
+    if "length" not in d:
+        raise FigureFormatError(f"{where}: a spiral needs a 'length'")
+    length = _number(d, "length", where)
+    if not length > 0:
+        raise FigureFormatError(f"{where}: length must be positive, got {length!r}")
+    return Spiral(tuple(values + [0.0] * (4 - len(values))), length)
+
+
+def _segment_from_dict(d: Any, where: str) -> Segment | Spiral:
     if not isinstance(d, dict) or "type" not in d:
-        raise FigureFormatError(f"{where}: expected an object with 'type' ('arc' or 'line'), got {d!r}")
+        raise FigureFormatError(f"{where}: expected an object with 'type' ('arc', 'line' or 'spiral'), got {d!r}")
     kind = d["type"]
+    if kind == "spiral":
+        return _spiral_from_dict(d, where)
     if kind == "line":
         length = _number(d, "length", where) if "length" in d else None
         if length is None or length <= 0:
             raise FigureFormatError(f"{where}: a line needs a positive 'length', got {d.get('length')!r}")
         return Segment(0.0, length)
     if kind != "arc":
-        raise FigureFormatError(f"{where}: piece type must be 'arc' or 'line', got {kind!r}")
+        raise FigureFormatError(f"{where}: piece type must be 'arc', 'line' or 'spiral', got {kind!r}")
     if "curvature" in d:
         k = _number(d, "curvature", where)
         if k == 0.0:

@@ -1,7 +1,10 @@
-"""Plane curves made of circular arcs and straight lines.
+"""Plane curves made of circular arcs, straight lines and spirals.
 
 A piece of constant signed curvature is a :class:`Segment` (``curvature`` 0 is a line, positive
-turns left). A :class:`Pose` is a point with a heading. Nothing here knows about mechanics.
+turns left). A :class:`Spiral` is a piece whose curvature is a cubic polynomial of arc length (a
+clothoid when it is linear); a drawing's smooth stretch traced in exact mode is a chain of them.
+A :class:`Pose` is a point with a heading. :func:`travel` and :func:`distance_to_segment` take
+either kind of piece. Nothing here knows about mechanics.
 """
 
 from __future__ import annotations
@@ -10,8 +13,13 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-__all__ = ["Pose", "Segment", "advance", "segment_points", "distance_to_segment", "rigid_motion_centre"]
+__all__ = ["Pose", "Segment", "Spiral", "advance", "travel", "segment_points", "distance_to_segment",
+           "rigid_motion_centre", "shifted_polynomial"]
+
+_GL10 = np.polynomial.legendre.leggauss(10)
+_CELL_TURN = 0.2  # largest heading change (radians) over one quadrature cell of a spiral
 
 
 class Pose(NamedTuple):
@@ -33,6 +41,136 @@ class Segment(NamedTuple):
         """Signed change of heading along the segment (radians)."""
         return self.curvature * self.length
 
+    @property
+    def coefficients(self) -> tuple[float, float, float, float]:
+        """Curvature as a cubic of arc length from the start (constant here)."""
+        return (float(self.curvature), 0.0, 0.0, 0.0)
+
+    @property
+    def constant(self) -> bool:
+        return True
+
+    def curvature_at(self, sigma) -> np.ndarray:
+        """Curvature at arc length ``sigma`` from the start (array of the shape of ``sigma``)."""
+        return np.full_like(np.asarray(sigma, dtype=float), self.curvature)
+
+    def part(self, s0: float, s1: float) -> "Segment":
+        """The stretch from ``s0`` to ``s1`` (arc lengths from the start)."""
+        return Segment(self.curvature, s1 - s0)
+
+
+class Spiral(NamedTuple):
+    """A piece whose curvature is a cubic polynomial of arc length ``sigma`` from its start::
+
+        kappa(sigma) = c0 + c1 sigma + c2 sigma^2 + c3 sigma^3,   0 <= sigma <= length
+
+    ``coefficients`` is ``(c0, c1, c2, c3)``. The heading is then a quartic in ``sigma`` and the
+    position its Fresnel-type integral, evaluated by Gauss-Legendre quadrature on cells over which
+    the heading turns by at most 0.2 rad (accurate to rounding).
+    """
+
+    coefficients: tuple[float, float, float, float]
+    length: float
+
+    @property
+    def constant(self) -> bool:
+        return not any(self.coefficients[1:])
+
+    def curvature_at(self, sigma) -> np.ndarray:
+        c0, c1, c2, c3 = self.coefficients
+        sigma = np.asarray(sigma, dtype=float)
+        return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+
+    def heading_change(self, sigma) -> np.ndarray:
+        """Turn of the heading from the start to ``sigma`` (the integral of the curvature)."""
+        c0, c1, c2, c3 = self.coefficients
+        sigma = np.asarray(sigma, dtype=float)
+        return sigma * (c0 + sigma * (c1 / 2.0 + sigma * (c2 / 3.0 + sigma * c3 / 4.0)))
+
+    @property
+    def turn(self) -> float:
+        return float(self.heading_change(self.length))
+
+    @property
+    def start_curvature(self) -> float:
+        return float(self.coefficients[0])
+
+    @property
+    def end_curvature(self) -> float:
+        return float(self.curvature_at(self.length))
+
+    def max_abs_curvature(self) -> float:
+        """Largest ``|kappa|`` on the piece (at the ends or a stationary point of the cubic)."""
+        c0, c1, c2, c3 = self.coefficients
+        cand = [0.0, self.length]
+        for r in np.roots([3.0 * c3, 2.0 * c2, c1]) if (c3 or c2 or c1) else []:
+            if abs(r.imag) < 1e-12 * max(1.0, abs(r)) and 0.0 < r.real < self.length:
+                cand.append(float(r.real))
+        return float(np.max(np.abs(self.curvature_at(np.array(cand)))))
+
+    def part(self, s0: float, s1: float) -> "Spiral":
+        """The stretch from ``s0`` to ``s1`` (arc lengths from the start), coefficients re-expanded."""
+        return Spiral(shifted_polynomial(self.coefficients, s0, 1.0), s1 - s0)
+
+
+def shifted_polynomial(coefficients, origin: float, sign: float) -> tuple[float, ...]:
+    """Coefficients of ``q(x) = p(origin + sign * x)`` for ``p(x) = sum c_k x^k``."""
+    c = [float(v) for v in coefficients]
+    n = len(c)
+    out = [0.0] * n
+    for k in range(n):
+        # p^(k)(origin) / k! * sign^k
+        acc = 0.0
+        for j in range(k, n):
+            acc += math.comb(j, k) * c[j] * origin ** (j - k)
+        out[k] = acc * sign**k
+    return tuple(out)
+
+
+def _spiral_grid(spiral: Spiral) -> np.ndarray:
+    """Cell boundaries on ``[0, length]`` over which the heading turns by at most ``_CELL_TURN``."""
+    n = max(1, math.ceil(spiral.max_abs_curvature() * spiral.length / _CELL_TURN))
+    return np.linspace(0.0, spiral.length, n + 1)
+
+
+def _spiral_offsets(spiral: Spiral, heading: float, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Displacement from arc length ``a`` to ``b`` (arrays of the same shape; ``|b - a|`` within a cell)."""
+    x, w = _GL10
+    mid, half = 0.5 * (a + b), 0.5 * (b - a)
+    sig = mid[..., None] + half[..., None] * x
+    th = heading + spiral.heading_change(sig)
+    return np.stack([half * (np.cos(th) @ w), half * (np.sin(th) @ w)])
+
+
+def _travel_spiral(pose: Pose, spiral: Spiral, s: np.ndarray):
+    grid = _spiral_grid(spiral)
+    x0, y0, th0 = pose
+    cells = _spiral_offsets(spiral, th0, grid[:-1], grid[1:])
+    node_x = x0 + np.concatenate([[0.0], np.cumsum(cells[0])])
+    node_y = y0 + np.concatenate([[0.0], np.cumsum(cells[1])])
+    # Each query is integrated from the nearest grid node (at most half a cell away).
+    j = np.clip(np.rint(s / grid[-1] * (grid.size - 1)).astype(int) if grid[-1] > 0 else np.zeros(s.shape, int),
+                0, grid.size - 1)
+    off = _spiral_offsets(spiral, th0, grid[j], s)
+    return node_x[j] + off[0], node_y[j] + off[1], th0 + spiral.heading_change(s)
+
+
+def travel(pose: Pose, piece, s):
+    """Pose reached after travelling ``s`` (scalar or array) along ``piece`` (a Segment or a Spiral).
+
+    Returns ``(x, y, heading)`` with the shape of ``s``.
+    """
+    if isinstance(piece, Spiral):
+        s = np.asarray(s, dtype=float)
+        x, y, th = _travel_spiral(pose, piece, s.ravel())
+        return x.reshape(s.shape), y.reshape(s.shape), th.reshape(s.shape)
+    return advance(pose, piece.curvature, s)
+
+
+def end_pose(pose: Pose, piece) -> Pose:
+    """Pose at the end of ``piece`` laid out from ``pose``."""
+    return Pose(*(float(v) for v in travel(pose, piece, piece.length)))
+
 
 def advance(pose: Pose, curvature: float, s):
     """Pose reached after travelling ``s`` (scalar or array) along a curve of ``curvature``.
@@ -51,14 +189,20 @@ def advance(pose: Pose, curvature: float, s):
     return x0 + chord * np.cos(mid), y0 + chord * np.sin(mid), th
 
 
-def segment_points(pose: Pose, segment: Segment, n: int = 200) -> np.ndarray:
-    """``n`` points along a segment, shape ``(2, n)``."""
-    x, y, _ = advance(pose, segment.curvature, np.linspace(0.0, segment.length, n))
+def segment_points(pose: Pose, segment, n: int = 200) -> np.ndarray:
+    """``n`` points along a segment or spiral, shape ``(2, n)``."""
+    x, y, _ = travel(pose, segment, np.linspace(0.0, segment.length, n))
     return np.vstack([x, y])
 
 
-def distance_to_segment(points, pose: Pose, segment: Segment) -> np.ndarray:
-    """Exact Euclidean distance from each of ``points`` (shape ``(2, n)``) to a segment."""
+def distance_to_segment(points, pose: Pose, segment) -> np.ndarray:
+    """Euclidean distance from each of ``points`` (shape ``(2, n)``) to a segment or a spiral.
+
+    Exact (closed form) for arcs and lines. For a spiral: the nearest of a dense sample, refined
+    by Newton's method on the foot point (accurate to rounding).
+    """
+    if isinstance(segment, Spiral):
+        return _distance_to_spiral(np.asarray(points, dtype=float), pose, segment)
     px, py = np.asarray(points, dtype=float)
     x0, y0, th0 = pose
     k, L = segment
@@ -76,6 +220,31 @@ def distance_to_segment(points, pose: Pose, segment: Segment) -> np.ndarray:
     swept = np.mod((ang - start) * math.copysign(1.0, k), 2 * math.pi)
     inside = swept <= abs(k) * L
     return np.where(inside, np.abs(np.hypot(px - cx, py - cy) - r), to_ends)
+
+
+def _distance_to_spiral(points: np.ndarray, pose: Pose, spiral: Spiral) -> np.ndarray:
+    L = spiral.length
+    if points.shape[1] == 0:
+        return np.zeros(0)
+    # Samples closer than a quarter of the smallest radius of curvature keep the nearest sample
+    # inside the basin of the true foot point.
+    kmax = spiral.max_abs_curvature()
+    n = int(min(max(65, math.ceil(4.0 * kmax * L) * 8 + 1), 20001))
+    sig = np.linspace(0.0, L, n)
+    x, y, _ = travel(pose, spiral, sig)
+    _, idx = cKDTree(np.column_stack([x, y])).query(points.T)
+    t = sig[idx]
+    for _ in range(8):
+        fx, fy, th = travel(pose, spiral, t)
+        dx, dy = fx - points[0], fy - points[1]
+        c, s_ = np.cos(th), np.sin(th)
+        g = dx * c + dy * s_  # derivative of half the squared distance
+        dg = 1.0 + spiral.curvature_at(t) * (-dx * s_ + dy * c)
+        step = np.where(dg > 0.1, g / np.where(dg > 0.1, dg, 1.0), g)
+        t = np.clip(t - np.clip(step, -L / (n - 1), L / (n - 1)), 0.0, L)
+    fx, fy, _ = travel(pose, spiral, t)
+    d = np.hypot(fx - points[0], fy - points[1])
+    return np.minimum(d, np.hypot(x[idx] - points[0], y[idx] - points[1]))
 
 
 def rigid_motion_centre(start: Pose, end: Pose) -> tuple[float, float] | None:

@@ -8,10 +8,17 @@ constrained system of :mod:`skatetrace.maneuver` and compiled with numba. A test
 ``solve_ivp(method="DOP853")`` on the same problem.
 
 The system integrated is ``y = (p1, p2, a, b, s)`` under the ramp control ``u = alpha t`` through
-*legs* of constant curvature: a leg ends where ``|s|`` reaches its switch length and the next one
-starts from that state (a smooth join). Two terminal events may be armed: the speed along the
-blade vanishing (``"stopped"``) and the mass coming within a distance of the singular point
-(``"singular"``).
+*legs*: a leg ends where ``|s|`` reaches its switch length and the next one starts from that state
+(a smooth join). On each leg the curvature is a cubic polynomial of the distance travelled since
+the leg started::
+
+    kappa(sigma) = c0 + c1 sigma + c2 sigma^2 + c3 sigma^3,    sigma = |s| - s_start,
+
+with ``s_start`` the previous leg's switch length (0 for the first leg); a leg of constant
+curvature is ``c1 = c2 = c3 = 0``. The curvature condition ``xi1 = kappa(s) xi2`` is algebraic, so
+only ``kappa(s)`` (not its derivative) enters the right-hand side, the events and the step control.
+Two terminal events may be armed: the speed along the blade vanishing (``"stopped"``) and the mass
+coming within a distance of the singular point ``(0, -kappa(s) I / M)`` (``"singular"``).
 
 Set the environment variable ``NUMBA_DISABLE_JIT=1`` to run the same code as plain Python.
 """
@@ -54,8 +61,21 @@ _MESSAGES = {
 
 
 @njit(cache=True)
+def _curvature(coef, s0, s):
+    """The leg's curvature at arc length ``s``: Horner's rule in ``sigma = |s| - s0``.
+
+    ``coef`` holds ``(c0, c1, c2, c3)``; with ``c1 = c2 = c3 = 0`` the result is ``c0`` exactly.
+    """
+    sigma = abs(s) - s0
+    return coef[0] + sigma * (coef[1] + sigma * (coef[2] + sigma * coef[3]))
+
+
+@njit(cache=True)
 def _rhs(M, m, I, kappa, alpha, t, y, out):
-    """Right-hand side of ``(p1, p2, a, b, s)``; returns False at the singular point itself."""
+    """Right-hand side of ``(p1, p2, a, b, s)`` for the curvature ``kappa`` given at ``y``.
+
+    Returns False at the singular point itself.
+    """
     p1, p2, a, b = y[0], y[1], y[2], y[3]
     u = alpha * t
     Mm = M + m
@@ -83,10 +103,16 @@ def _rhs(M, m, I, kappa, alpha, t, y, out):
 
 
 @njit(cache=True)
-def _speed(M, m, I, kappa, alpha, t, y):
+def _rhs_leg(M, m, I, coef, s0, alpha, t, y, out):
+    """:func:`_rhs` on a leg with curvature coefficients ``coef`` starting at ``|s| = s0``."""
+    return _rhs(M, m, I, _curvature(coef, s0, y[4]), alpha, t, y, out)
+
+
+@njit(cache=True)
+def _speed(M, m, I, coef, s0, alpha, t, y):
     """Speed along the blade ``xi2`` (the ``"stopped"`` event); NaN at the singular point."""
     out = np.empty(5)
-    if not _rhs(M, m, I, kappa, alpha, t, y, out):
+    if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, out):
         return np.nan
     return out[4]
 
@@ -111,15 +137,22 @@ def _interpolate(t_old, h, y_old, F, t):
 
 
 @njit(cache=True)
-def _event_values(M, m, I, kappa, alpha, t, y, switch, stop_event, sing_b, sing_limit, g):
-    """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit."""
+def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g):
+    """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit.
+
+    The singular point ``(0, -kappa I / M)`` moves with the curvature at ``y``'s ``|s|``.
+    """
     g[0] = abs(y[4]) - switch
-    g[1] = _speed(M, m, I, kappa, alpha, t, y) if stop_event else 1.0
-    g[2] = math.hypot(y[2], y[3] - sing_b) - sing_limit if sing_limit > 0.0 else 1.0
+    g[1] = _speed(M, m, I, coef, s0, alpha, t, y) if stop_event else 1.0
+    if sing_limit > 0.0:
+        sing_b = -_curvature(coef, s0, y[4]) * I / M
+        g[2] = math.hypot(y[2], y[3] - sing_b) - sing_limit
+    else:
+        g[2] = 1.0
 
 
 @njit(cache=True)
-def _dense_coefficients(M, m, I, kappa, alpha, t_old, h, y_old, y_new, f_new, K):
+def _dense_coefficients(M, m, I, coef, s0, alpha, t_old, h, y_old, y_new, f_new, K):
     """The interpolant's coefficients F (7 x n) for the step just taken (3 extra stages)."""
     n = y_old.size
     Kx = np.empty((16, n))
@@ -129,7 +162,7 @@ def _dense_coefficients(M, m, I, kappa, alpha, t_old, h, y_old, y_new, f_new, K)
         dy = np.zeros(n)
         for j in range(s):
             dy += _A_EXTRA[s - _NS - 1, j] * Kx[j]
-        _rhs(M, m, I, kappa, alpha, t_old + _C_EXTRA[s - _NS - 1] * h, y_old + dy * h, tmp)
+        _rhs_leg(M, m, I, coef, s0, alpha, t_old + _C_EXTRA[s - _NS - 1] * h, y_old + dy * h, tmp)
         Kx[s] = tmp
     F = np.empty((_POWER, n))
     dy = y_new - y_old
@@ -145,7 +178,7 @@ def _dense_coefficients(M, m, I, kappa, alpha, t_old, h, y_old, y_new, f_new, K)
 
 
 @njit(cache=True)
-def _initial_step(M, m, I, kappa, alpha, t0, y0, f0, t_bound, direction, rtol, atol):
+def _initial_step(M, m, I, coef, s0, alpha, t0, y0, f0, t_bound, direction, rtol, atol):
     """scipy's ``select_initial_step`` for an 8th-order method (error estimator order 7)."""
     interval = abs(t_bound - t0)
     if interval == 0.0:
@@ -160,7 +193,7 @@ def _initial_step(M, m, I, kappa, alpha, t0, y0, f0, t_bound, direction, rtol, a
     h0 = min(h0, interval)
     y1 = y0 + h0 * direction * f0
     f1 = np.empty(y0.size)
-    _rhs(M, m, I, kappa, alpha, t0 + h0 * direction, y1, f1)
+    _rhs_leg(M, m, I, coef, s0, alpha, t0 + h0 * direction, y1, f1)
     d2 = _rms((f1 - f0) / scale) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -180,10 +213,11 @@ def _grow(arr, n):
 def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, sing_limit, max_nfev, dense):
     """Integrate through the legs; see :func:`integrate_legs`.
 
+    ``kappas`` is the (nlegs, 4) array of curvature coefficients ``c0..c3`` of the legs.
     Returns ``(status, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps)``.
     """
     n = y0.size
-    nlegs = kappas.size
+    nlegs = kappas.shape[0]
     direction = 1.0 if t_end >= 0.0 else -1.0
     t = 0.0
     y = y0.copy()
@@ -207,14 +241,14 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
     g_new = np.empty(3)
     F_none = np.zeros((_POWER, n))  # stands for "no dense output" on steps that need none
     for leg in range(nlegs):
-        kappa = kappas[leg]
+        coef = kappas[leg]  # a view: (c0, c1, c2, c3) of this leg
+        s0 = switches[leg - 1] if leg > 0 else 0.0  # |s| where this leg starts
         switch = switches[leg]
-        sing_b = -kappa * I / M
-        if not _rhs(M, m, I, kappa, alpha, t, y, f):
+        if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, f):
             return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
         nfev += 1
-        _event_values(M, m, I, kappa, alpha, t, y, switch, stop_event, sing_b, sing_limit, g_old)
-        h_abs = _initial_step(M, m, I, kappa, alpha, t, y, f, t_end, direction, rtol, atol)
+        _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g_old)
+        h_abs = _initial_step(M, m, I, coef, s0, alpha, t, y, f, t_end, direction, rtol, atol)
         nfev += 1
         while True:
             if direction * (t_end - t) <= 0.0:
@@ -244,7 +278,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                         for j in range(s):
                             acc += _A[s, j] * K[j, i]
                         ytmp[i] = y[i] + acc * h
-                    if not _rhs(M, m, I, kappa, alpha, t + _C[s] * h, ytmp, kstage):
+                    if not _rhs_leg(M, m, I, coef, s0, alpha, t + _C[s] * h, ytmp, kstage):
                         ok = False
                     for i in range(n):
                         K[s, i] = kstage[i]
@@ -254,7 +288,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                     for j in range(_NS):
                         acc += _B[j] * K[j, i]
                     ynew[i] = y[i] + h * acc
-                if not _rhs(M, m, I, kappa, alpha, t + h, ynew, f_new):
+                if not _rhs_leg(M, m, I, coef, s0, alpha, t + h, ynew, f_new):
                     ok = False
                 nfev += 1
                 if not ok or nfev > max_nfev:
@@ -291,14 +325,14 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
             if not np.all(np.isfinite(ynew)):
                 return _NONFINITE, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
             # events: a sign change (or touch of zero) between the step's ends, as in solve_ivp
-            _event_values(M, m, I, kappa, alpha, t_new, ynew, switch, stop_event, sing_b, sing_limit, g_new)
+            _event_values(M, m, I, coef, s0, alpha, t_new, ynew, switch, stop_event, sing_limit, g_new)
             active = False
             for e in range(3):
                 if (g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0):
                     active = True
             F = F_none
             if dense or active:
-                F = _dense_coefficients(M, m, I, kappa, alpha, t, h, y, ynew, f_new, K)
+                F = _dense_coefficients(M, m, I, coef, s0, alpha, t, h, y, ynew, f_new, K)
                 nfev += 3
             hit = -1
             t_hit = t_new
@@ -314,8 +348,8 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                         mid = 0.5 * (lo + hi)
                         if mid == lo or mid == hi:
                             break
-                        _event_values(M, m, I, kappa, alpha, mid, _interpolate(t, h, y, F, mid), switch,
-                                      stop_event, sing_b, sing_limit, g)
+                        _event_values(M, m, I, coef, s0, alpha, mid, _interpolate(t, h, y, F, mid), switch,
+                                      stop_event, sing_limit, g)
                         if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
                             lo, glo = mid, g[e]
                         else:
@@ -417,26 +451,68 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
                    max_nfev: int = 150_000, dense: bool = False) -> IntegrationResult:
     """Integrate ``(p1, p2, a, b, s)`` from ``t = 0`` under ``u = alpha t`` through legs.
 
+    Leg ``k`` runs from ``|s| = s_start`` (``switches[k - 1]``, or 0 for the first leg) to
+    ``|s| = switches[k]`` and holds the curvature::
+
+        kappa(sigma) = c0 + c1 sigma + c2 sigma^2 + c3 sigma^3,    sigma = |s| - s_start,
+
+    evaluated at the current state's ``|s|`` (``s`` runs negative backwards in time, hence the
+    absolute value).
+
     Parameters
     ----------
+    params : SleighParams
     y0 : array_like, shape (5,)
-    kappas, switches : sequences of float
-        Curvature of each leg and the ``|s|`` at which it ends (``inf`` for the last).
+        Initial state ``(p1, p2, a, b, s)``.
+    kappas : array_like, shape (n,) or (n, 4)
+        Curvature of each leg: shape ``(n,)`` gives a constant curvature per leg (the same as
+        ``c0`` with ``c1 = c2 = c3 = 0``); shape ``(n, 4)`` gives the polynomial coefficients
+        ``(c0, c1, c2, c3)`` of each leg.
+    switches : array_like, shape (n,)
+        The cumulative ``|s|`` at which each leg ends (``inf`` for the last).
+    alpha : float
+        Slope of the ramp control ``u = alpha t``.
     t_end : float
         Final time; negative integrates backwards.
+    rtol, atol : float
+        Tolerances of the step-size control.
     stop_event : bool
         End where the speed along the blade vanishes.
     singular_limit : float
-        If positive, end where the mass comes within this distance of the singular point.
+        If positive, end where the mass comes within this distance of the singular point
+        ``(0, -kappa I / M)``, with ``kappa`` the curvature at the current ``|s|``.
     max_nfev : int
         Budget of right-hand-side evaluations; running out means the step size collapsed.
     dense : bool
         Keep the dense output of every step.
+
+    Returns
+    -------
+    IntegrationResult
+
+    Raises
+    ------
+    ValueError
+        If ``kappas`` is neither of shape ``(n,)`` nor ``(n, 4)``, if ``switches`` is not of
+        shape ``(n,)`` with the same ``n``, or if there is no leg.
     """
     kap = np.asarray(kappas, dtype=float)
-    sw = np.asarray(switches, dtype=float)
+    sw = np.ascontiguousarray(switches, dtype=float)
+    if kap.ndim == 1:
+        coef = np.zeros((kap.shape[0], 4))
+        coef[:, 0] = kap
+    elif kap.ndim == 2 and kap.shape[1] == 4:
+        coef = np.ascontiguousarray(kap)
+    else:
+        raise ValueError(f"kappas must have shape (n,) (constant curvature per leg) or (n, 4) "
+                         f"(cubic coefficients c0..c3 per leg), got shape {kap.shape}")
+    if sw.ndim != 1 or sw.shape[0] != coef.shape[0]:
+        raise ValueError(f"switches must have shape ({coef.shape[0]},) to match the {coef.shape[0]} legs of "
+                         f"kappas, got shape {sw.shape}")
+    if coef.shape[0] == 0:
+        raise ValueError("at least one leg is required")
     y = np.asarray(y0, dtype=float).copy()
-    out = _run(params.M, params.m, params.I, y, kap, sw, float(alpha), float(t_end), float(rtol), float(atol),
+    out = _run(params.M, params.m, params.I, y, coef, sw, float(alpha), float(t_end), float(rtol), float(atol),
                bool(stop_event), float(singular_limit), int(max_nfev), bool(dense))
     status, leg, t, yf, bounds, st, sh, sy, sF, sleg, ns = out
     nlegs = int(leg) + 1

@@ -75,17 +75,21 @@ def result_dict(trace: FigureTrace) -> dict[str, Any]:
         d = sec.to_dict()
         d["start_time"] = t0
         pieces = []
-        s_start = 0.0
-        for p in sec.section.pieces:
-            entry: dict[str, Any] = {"index": p.index, "curvature": p.segment.curvature, "length": p.segment.length,
-                                     "direction": p.direction}
+        starts = np.cumsum([0.0] + [p.segment.length for p in sec.section.pieces[:-1]])
+        if sec.phases:
+            times = sec.time_at_length(starts)
+            times[0] = 0.0
+            states = sec.evaluate(times)
+        for i, p in enumerate(sec.section.pieces):
+            entry: dict[str, Any] = {"index": p.index, "curvature": p.segment.coefficients[0],
+                                     "length": p.segment.length, "direction": p.direction}
+            if not p.segment.constant:
+                entry["curvature"] = None
+                entry["curvature_coefficients"] = list(p.segment.coefficients)
             if sec.phases:
-                tp = 0.0 if s_start == 0.0 else sec.time_at_length(s_start)
-                v = sec.evaluate(np.array([tp]))
-                entry["start_time"] = t0 + tp
-                entry["initial_state"] = {k: float(v[k][0]) for k in _STATE_KEYS}
+                entry["start_time"] = t0 + float(times[i])
+                entry["initial_state"] = {k: float(states[k][i]) for k in _STATE_KEYS}
             pieces.append(entry)
-            s_start += p.segment.length
         d["pieces"] = pieces
         join = sec.section.pieces[0].join_before
         d["join_before"] = join.to_dict() if join is not None else None

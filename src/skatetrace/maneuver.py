@@ -16,8 +16,11 @@ A *glide* is the steady state of this system: the mass is locked at ``(0, b)`` o
 glide and ramps ``u = alpha t`` until the speed vanishes; a *launch* is the same integrated
 backwards in time. Either may run through several smooth joins (a change of curvature with the
 state continuous), so a smooth piece of several arcs and lines is a launch, one glide and a stop.
-Each is a small boundary-value problem in (alpha, duration) solved by Newton's method (MINPACK's
-hybrid method), started from a bracket of the event-located stopping length.
+On a spiral (curvature varying along the piece) there is no steady glide; the apex is then an
+instant with the mass momentarily at rest relative to the blade, and the legs carry the
+curvature as a cubic of the distance travelled. Each manoeuvre is a small boundary-value problem
+in (alpha, duration) solved by Newton's method (MINPACK's hybrid method), started from a bracket
+of the event-located stopping length.
 
 The state integrated here is ``(p1, p2, a, b, s)``, ``s`` the arc length travelled.
 """
@@ -39,12 +42,24 @@ __all__ = ["Leg", "ManeuverSolution", "glide_state", "constrained_rates", "solve
 
 @dataclass(frozen=True, slots=True)
 class Leg:
-    """One stretch of constant curvature inside a manoeuvre: a dense solution on ``[t0, t1]``."""
+    """One stretch of the curve inside a manoeuvre: a dense solution on ``[t0, t1]``.
 
-    kappa: float
+    The curvature on the leg is ``c0 + c1 sigma + c2 sigma^2 + c3 sigma^3`` with ``coefficients =
+    (c0, c1, c2, c3)`` and ``sigma = |s| - s0`` the distance travelled since the leg began (from
+    the glide, backwards for a launch); constant on an arc or a line.
+    """
+
+    coefficients: tuple[float, float, float, float]
     t0: float
     t1: float
     sol: object  # DenseSolution of (p1, p2, a, b, s), callable like scipy's OdeSolution
+    s0: float = 0.0
+
+    def kappa_at(self, s) -> np.ndarray:
+        """Curvature at the manoeuvre's arc-length coordinate ``s`` (signed, as integrated)."""
+        sigma = np.abs(np.asarray(s, dtype=float)) - self.s0
+        c0, c1, c2, c3 = self.coefficients
+        return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -116,19 +131,41 @@ def constrained_rates(params: SleighParams, kappa, p1, p2, a, b, u):
     return adot, bdot, n
 
 
+def _coefficients(kappa) -> tuple[float, float, float, float]:
+    """A leg's curvature as cubic coefficients: a number (constant) or up to four coefficients."""
+    if np.ndim(kappa) == 0:
+        return (float(kappa), 0.0, 0.0, 0.0)
+    c = [float(v) for v in kappa]
+    return tuple(c + [0.0] * (4 - len(c)))
+
+
+def _kappa_at(legs_spec, s: float) -> float:
+    """Curvature at ``|s|`` on legs ``[(coefficients, s_switch), ...]``."""
+    start = 0.0
+    for coeffs, switch in legs_spec:
+        if abs(s) <= switch:
+            break
+        start = switch
+    c0, c1, c2, c3 = coeffs
+    sigma = abs(s) - start
+    return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+
+
 def _integrate(params, y0, legs_spec, alpha, t_end, *, rtol, atol, stop=False, singular_limit=0.0, dense=True):
-    """Integrate the constrained system under ``u = alpha t`` through legs ``[(kappa, s_switch), ...]``.
+    """Integrate the constrained system under ``u = alpha t`` through legs ``[(coefficients, s_switch), ...]``.
 
     A leg ends when ``|s|`` reaches its ``s_switch`` (the last leg's is ``inf``) or at ``t_end``.
     ``stop`` and ``singular_limit`` arm the terminal events of :func:`integrate_legs`. Returns
     ``(legs, status, t, y, hit)``: the legs entered (``None`` each unless ``dense``), 0 or a
     negative failure code, the final time and state, and the name of the terminal event hit.
     """
-    res = integrate_legs(params, y0, [k for k, _ in legs_spec], [s for _, s in legs_spec], alpha, t_end,
+    res = integrate_legs(params, y0, np.array([k for k, _ in legs_spec], dtype=float).reshape(-1, 4),
+                         [s for _, s in legs_spec], alpha, t_end,
                          rtol=rtol, atol=atol, stop_event=stop, singular_limit=singular_limit,
                          max_nfev=_MAX_EVALUATIONS, dense=dense)
     bounds = res.leg_bounds
-    legs = [Leg(float(legs_spec[i][0]), float(bounds[i]), float(bounds[i + 1]), res.legs[i] if res.legs else None)
+    legs = [Leg(legs_spec[i][0], float(bounds[i]), float(bounds[i + 1]), res.legs[i] if res.legs else None,
+                float(legs_spec[i - 1][1]) if i else 0.0)
             for i in range(res.nlegs)]
     return legs, res.status, res.t, res.y, res.hit
 
@@ -136,9 +173,9 @@ def _integrate(params, y0, legs_spec, alpha, t_end, *, rtol, atol, stop=False, s
 _MAX_EVALUATIONS = 150_000 * 4  # per integration: only near a blow-up does the step size collapse like this
 
 
-def _end_speed(params, kappa, y, u):
-    p1, p2, a, b, _ = y
-    ad, bd, _n = constrained_rates(params, kappa, p1, p2, a, b, u)
+def _end_speed(params, legs_spec, y, u):
+    p1, p2, a, b, s = y
+    ad, bd, _n = constrained_rates(params, _kappa_at(legs_spec, s), p1, p2, a, b, u)
     return velocities(params, p1, p2, a, b, ad, bd)[1]
 
 
@@ -147,7 +184,7 @@ def _min_singular_distance(params, legs, n=400):
     for leg in legs:
         ts = np.linspace(leg.t0, leg.t1, n)
         y = leg.sol(ts)
-        sb = -leg.kappa * params.I / params.M
+        sb = -leg.kappa_at(y[4]) * params.I / params.M
         best = min(best, float(np.min(np.hypot(y[2], y[3] - sb))))
     return best
 
@@ -173,19 +210,22 @@ def solve_stop(
     ----------
     legs : list of (kappa, length)
         The curve from the glide onwards (backwards for a launch): curvature (1/length) and arc
-        length of each stretch, joined smoothly. The first curvature is the glide's.
+        length of each stretch, joined smoothly. ``kappa`` is a number (an arc or a line) or up to
+        four coefficients of a cubic in the distance travelled on the leg (a spiral; for a launch
+        that distance runs backwards along the curve). The curvature where the first leg begins is
+        the glide's (or the instant apex's).
     glide_ab : (float, float)
         Locked mass position during the glide.
     speed : float
         Glide speed (> 0).
     """
-    kappa = legs[0][0]
     length = float(sum(ell for _, ell in legs))
     legs_spec = []
     acc = 0.0
     for i, (k, ell) in enumerate(legs):
         acc += ell
-        legs_spec.append((float(k), acc if i + 1 < len(legs) else math.inf))
+        legs_spec.append((_coefficients(k), acc if i + 1 < len(legs) else math.inf))
+    kappa = legs_spec[0][0][0]
     kind = "launch" if backward else "stop"
     a0, b0 = glide_ab
     sa, sb = 0.0, -kappa * params.I / params.M
@@ -304,7 +344,7 @@ def _bracket_stop(params, legs_spec, y0, t_max, speed, length, a1, a2, rtol, ato
         tau, yf = run(alpha)
     except (_NoStop, RuntimeError):
         return None, None, count
-    res = {"end_speed": float(_end_speed(params, legs_spec[-1][0], yf, alpha * tau)),
+    res = {"end_speed": float(_end_speed(params, legs_spec, yf, alpha * tau)),
            "length": float(abs(yf[4]) - length)}
     if not (abs(res["end_speed"]) < 1e-11 * speed and abs(res["length"]) < 1e-11 * length):
         return None, None, count
@@ -321,7 +361,7 @@ def _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol,
         legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol, dense=False)
         if status != 0 or len(legs) < len(legs_spec) or not np.all(np.isfinite(yf)):
             return np.array([1e3, 1e3])
-        v = _end_speed(params, legs_spec[-1][0], yf, alpha * tau)
+        v = _end_speed(params, legs_spec, yf, alpha * tau)
         return np.array([v / speed, (abs(yf[4]) - length) / length])
 
     out = root(residual, [1.0, 1.0], method="hybr", options={"xtol": 1e-14})

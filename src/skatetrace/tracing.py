@@ -9,6 +9,10 @@ to rest as *launch, glide, stop* (see :mod:`skatetrace.maneuver`):
    and duration are found by Newton's method so that the speed vanishes exactly at the section's end;
 3. a launch, the same integrated backwards from the glide to the section's start.
 
+On a spiral (a piece whose curvature is a cubic of arc length, from exact mode) the mass cannot
+be locked: there the apex is an instant at the piece's middle, and the launch runs straight into
+the stop. The legs then carry the curvature polynomial, evaluated at the arc length reached.
+
 The curvature condition holds by construction at every instant, so the blade follows the section
 exactly; the length and the zero end speeds are the boundary conditions of the Newton solves.
 A section traversed backwards (after a reversal) is solved forwards and mapped by the symmetry
@@ -25,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .figure import Figure, Section
-from .geometry import advance
+from .geometry import shifted_polynomial, travel
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, solve_stop
 from .model import SleighParams, mass_energy, velocities
 
@@ -223,7 +227,7 @@ class SectionTrace:
                 if not np.any(m):
                     continue
                 y = leg.sol(np.clip(tl[m], lo, hi))
-                ad, bd, _ = constrained_rates(self.params, leg.kappa, y[0], y[1], y[2], y[3],
+                ad, bd, _ = constrained_rates(self.params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3],
                                               man.control(np.clip(tl[m], lo, hi)))
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
                     vals[key][m] = val
@@ -247,7 +251,7 @@ class SectionTrace:
             m = seg == i
             if np.any(m):
                 local = np.clip(s[m] - starts[i], 0.0, p.segment.length)
-                xs, ys, hs = advance(p.start, p.segment.curvature, local)
+                xs, ys, hs = travel(p.start, p.segment, local)
                 x[m], y[m], heading[m] = xs, ys, hs
         d = self.direction
         if d < 0:
@@ -259,22 +263,24 @@ class SectionTrace:
         out["xi1"], out["xi2"] = xi1, xi2
         return out
 
-    def time_at_length(self, s: float) -> float:
-        """Physical section time at which the blade has travelled ``s`` (bisection; speed > 0 inside).
+    def time_at_length(self, s):
+        """Physical section time at which the blade has travelled ``s`` (scalar or 1-D array).
 
-        A time within 1e-9 of a breakpoint (a join) is snapped onto it, so that evaluating there
-        gives the state at the start of the next piece.
+        Bisection (the speed is positive inside a section), all lengths at once. A time within 1e-9
+        of a breakpoint (a join) is snapped onto it, so that evaluating there gives the state at
+        the start of the next piece.
         """
-        lo, hi = 0.0, self.duration
+        target = np.asarray(s, dtype=float)
+        flat = np.atleast_1d(target).ravel()
+        lo, hi = np.zeros(flat.size), np.full(flat.size, self.duration)
         for _ in range(100):
             mid = 0.5 * (lo + hi)
-            if self.evaluate(np.array([mid]))["s"][0] < s:
-                lo = mid
-            else:
-                hi = mid
+            below = self.evaluate(mid)["s"] < flat
+            lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
         bps = self.breakpoints()
-        near = bps[np.argmin(np.abs(bps - hi))]
-        return float(near) if abs(near - hi) <= 1e-9 * max(1.0, self.duration) else hi
+        near = bps[np.argmin(np.abs(bps[:, None] - hi[None, :]), axis=0)]
+        out = np.where(np.abs(near - hi) <= 1e-9 * max(1.0, self.duration), near, hi)
+        return float(out[0]) if target.ndim == 0 else out.reshape(target.shape)
 
     def to_dict(self) -> dict[str, Any]:
         phases = []
@@ -285,7 +291,7 @@ class SectionTrace:
                 d.update(control="u = alpha * t (t from the glide, backwards for a launch)",
                          alpha=man.params[0] * self.speed**2,
                          duration=abs(man.duration) / self.speed,
-                         legs=[{"kappa": leg.kappa} for leg in man.legs],
+                         legs=[{"curvature": list(leg.coefficients)} for leg in man.legs],
                          residuals=man.residuals, min_singular_distance=man.min_singular_distance)
             else:
                 d.update(control="mass locked", kappa=ph.kappa)
@@ -324,29 +330,58 @@ def _glide_candidates(params: SleighParams, segs, g: int, ell: float,
     the new curvature, so those positions are tried next. Last, on a gently curved arc, where a
     stop driven from ``a = 0`` needs lateral excursions of about ``2 / |k|``, the line's apex
     ``(a, 0)`` is tried as an instant (not a glide): the launch runs straight into the stop.
+
+    A spiral (varying curvature) has no glide: every apex on it is an instant at its middle, at
+    ``(0, b)`` for ``b = 0`` and on both sides of the singular point ``b* = -k I / M`` of the
+    curvature ``k`` there, then at the line's apex.
     """
-    kg = segs[g].curvature
+    seg = segs[g]
     scale = params.length_scale
-    base = _line_apex(params, ell)
-    if kg == 0.0:
-        return [((base, 0.0), True), ((2.0 * base, 0.0), True), ((4.0 * base, 0.0), True)]
-    if options.glide_lateral is not None:
-        return [((0.0, options.glide_lateral), True)]
-    out = [0.0]
-    after = next((s.curvature for s in segs[g + 1:] if s.curvature != kg), None)
-    before = next((s.curvature for s in reversed(segs[:g]) if s.curvature != kg), None)
-    for k2 in (after, before):
-        if k2 is None:
-            continue
-        bstar = -k2 * params.I / params.M
-        sgn = math.copysign(1.0, kg - k2)
-        out += [bstar + sgn * d * scale for d in (1.0, 1.5, 2.5)]
+    if not seg.constant:
+        kg = float(seg.curvature_at(0.5 * seg.length))
+        bstar = -kg * params.I / params.M
+        out = [0.0] + [bstar + d * scale for d in (1.0, -1.0, 2.5, -2.5)]
+        steady = False
+    else:
+        kg = seg.coefficients[0]
+        base = _line_apex(params, ell)
+        if kg == 0.0:
+            return [((base, 0.0), True), ((2.0 * base, 0.0), True), ((4.0 * base, 0.0), True)]
+        if options.glide_lateral is not None:
+            return [((0.0, options.glide_lateral), True)]
+        out = [0.0]
+        # the curvature on the other side of the nearest join that changes it
+        after = next((s.coefficients[0] for s in segs[g + 1:] if s.coefficients[0] != kg), None)
+        before = next((float(s.curvature_at(s.length)) for s in reversed(segs[:g])
+                       if float(s.curvature_at(s.length)) != kg), None)
+        for k2 in (after, before):
+            if k2 is None:
+                continue
+            bstar = -k2 * params.I / params.M
+            sgn = math.copysign(1.0, kg - k2)
+            out += [bstar + sgn * d * scale for d in (1.0, 1.5, 2.5)]
+        steady = True
     seen: list[float] = []
     for b in out:
         if all(abs(b - c) > 1e-12 for c in seen):
             seen.append(b)
-    instant = _line_apex(params, 0.5 * segs[g].length)
-    return [((0.0, b), True) for b in seen] + [((instant, 0.0), False), ((2.0 * instant, 0.0), False)]
+    instant = _line_apex(params, 0.5 * seg.length)
+    return [((0.0, b), steady) for b in seen] + [((instant, 0.0), False), ((2.0 * instant, 0.0), False)]
+
+
+def _legs_from_apex(segs, g: int, ell_g: float) -> tuple[list, list]:
+    """Legs ``[(coefficients, length), ...]`` of the launch and the stop from an apex on segment ``g``.
+
+    The launch's legs run backwards along the curve from ``ell_g`` into segment ``g`` (a curvature
+    polynomial of the distance back from the apex), the stop's forwards from ``ell_g`` before its end.
+    """
+    seg = segs[g]
+    L = seg.length
+    before = [(shifted_polynomial(seg.coefficients, ell_g, -1.0), ell_g)]
+    before += [(shifted_polynomial(s.coefficients, s.length, -1.0), s.length) for s in reversed(segs[:g])]
+    after = [(shifted_polynomial(seg.coefficients, L - ell_g, 1.0), ell_g)]
+    after += [(s.coefficients, s.length) for s in segs[g + 1:]]
+    return before, after
 
 
 def trace_section(
@@ -367,7 +402,8 @@ def trace_section(
 
     def placements():
         for g in order:
-            kg, Lg = segs[g]
+            Lg = segs[g].length
+            kg = float(segs[g].curvature_at(0.5 * Lg))
             ell = min(options.maneuver_length or _auto_maneuver_length(params, kg, Lg), 0.5 * Lg)
             for glide_ab, steady in _glide_candidates(params, segs, g, ell, options):
                 yield g, kg, Lg, ell, glide_ab, steady
@@ -381,8 +417,7 @@ def trace_section(
             extra += 1
         # an instant apex is no glide: the launch and the stop share the whole segment
         ell_g = ell if steady else 0.5 * Lg
-        before = [(kg, ell_g)] + [(s.curvature, s.length) for s in reversed(segs[:g])]
-        after = [(kg, ell_g)] + [(s.curvature, s.length) for s in segs[g + 1:]]
+        before, after = _legs_from_apex(segs, g, ell_g)
         glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
                  "kappa": kg, "speed": options.speed}
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -516,7 +551,8 @@ class FigureTrace:
 
 
 def _section_key(params: SleighParams, section: Section, options: TraceOptions) -> tuple:
-    return (params, options, tuple((round(s.curvature, 14), round(s.length, 14)) for s in section.segments))
+    return (params, options, tuple((tuple(round(c, 14) for c in s.coefficients), round(s.length, 14))
+                                   for s in section.segments))
 
 
 def trace_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),

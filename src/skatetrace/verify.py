@@ -9,7 +9,8 @@ join's angle, and the momenta are those of the mass's motion at rest. It then me
 - the deviation from the target figure both ways (replayed points to the figure, figure to the
   replayed path), per section and overall,
 - the speed at every cusp,
-- the drift of ``p1 + r p2`` on each arc and of ``p2`` on each line (both are invariants there).
+- the drift of ``p1 + r p2`` on each arc and of ``p2`` on each line (both are invariants there;
+  a spiral has no such invariant).
 """
 
 from __future__ import annotations
@@ -215,6 +216,27 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     return best
 
 
+def _nearer(d: np.ndarray, pts: np.ndarray, placed) -> np.ndarray:
+    """``d`` lowered to the distance from ``pts`` to a placed piece where that is nearer.
+
+    A spiral's distance takes Newton iterations, so it is computed only for the points that its
+    bounding disc does not already rule out.
+    """
+    seg = placed.segment
+    if seg.constant:
+        return np.minimum(d, distance_to_segment(pts, placed.start, seg))
+    xy = segment_points(placed.start, seg, 65)
+    centre = xy.mean(axis=1)
+    # chords of the 65-point sample lie within L^2 max|k| / (8 * 64^2) of the curve
+    radius = float(np.max(np.hypot(xy[0] - centre[0], xy[1] - centre[1])))
+    radius += seg.length**2 * seg.max_abs_curvature() / (8 * 64**2) + 1e-12 * seg.length
+    near = np.hypot(pts[0] - centre[0], pts[1] - centre[1]) - radius < d
+    out = d.copy()
+    if np.any(near):
+        out[near] = np.minimum(d[near], distance_to_segment(pts[:, near], placed.start, seg))
+    return out
+
+
 def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_tol: float = 1e-6) -> VerificationReport:
     """Replay ``trace``'s controls through the full dynamics and measure everything.
 
@@ -242,7 +264,7 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         d_to = np.full(pts.shape[1], np.inf)
         d_from = np.zeros(0)
         for p in sec.section.pieces:
-            d_to = np.minimum(d_to, distance_to_segment(pts, p.start, p.segment))
+            d_to = _nearer(d_to, pts, p)
             n = max(64, int(p.segment.length * 200))
             # Each piece's points are matched with the stretch of replay labelled with that piece
             # (one sample more each side): where two pieces pass close to each other, as at the
@@ -280,7 +302,9 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             mp = m & (rep.piece == p.index)
             if np.count_nonzero(mp) < 2:
                 continue
-            k = p.segment.curvature
+            if not p.segment.constant:
+                continue  # a spiral: neither p1 + r p2 nor p2 is conserved
+            k = p.segment.coefficients[0]
             if k != 0.0:
                 inv = rep.state[0, mp] + rep.state[1, mp] / k
                 name = "p1 + r p2"
