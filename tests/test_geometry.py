@@ -265,3 +265,12 @@ def test_spiral_max_abs_curvature():
     sp = Spiral((0.0, 3.0, -1.0, 0.0), 4.0)  # kappa = 3s - s^2: peak 2.25 at s = 1.5, -4 at s = 4
     assert sp.max_abs_curvature() == pytest.approx(4.0)
     assert Spiral((0.0, 3.0, -1.0, 0.0), 2.0).max_abs_curvature() == pytest.approx(2.25)
+
+
+@given(st.lists(st.floats(-3.0, 3.0), min_size=4, max_size=4), st.floats(0.05, 5.0))
+@settings(max_examples=80, deadline=None)
+def test_spiral_max_abs_curvature_bounds_dense_samples(coeffs, length):
+    sp = Spiral(tuple(coeffs), length)
+    dense = float(np.max(np.abs(sp.curvature_at(np.linspace(0.0, length, 20001)))))
+    assert dense <= sp.max_abs_curvature() * (1 + 1e-12) + 1e-300
+    assert sp.max_abs_curvature() <= dense * (1 + 1e-6) + 1e-12

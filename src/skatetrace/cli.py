@@ -31,6 +31,10 @@ def _add_source_args(t) -> None:
                                  "(figure units); default 1e-3 of the figure's size")
     g.add_argument("--fit", dest="method", choices=("greedy", "min"), default="greedy",
                    help="arc-spline fit: greedy subdivision or the minimum number of arcs (default greedy)")
+    g.add_argument("--exact", nargs="?", const=True, default=None, metavar="TOL",
+                   help="exact mode: trace the smooth runs as curvature splines (spirals whose curvature is a "
+                        "cubic of arc length) within TOL (default 1e-7 of the figure's size) instead of arcs; "
+                        "the arc fit is still made and both deviations are shown")
     s = t.add_argument_group("school figures (school:NAME)")
     s.add_argument("--height", type=float, default=1.7, help="skater height in m (default 1.7)")
     s.add_argument("--body-mass", type=float, default=60.0, help="skater body mass in kg (default 60)")
@@ -52,7 +56,7 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--I", type=float, help="sleigh inertia about the contact point (default: the figure's, else 3)")
     t.add_argument("--speed", type=float, help="glide speed (default: 1 model unit, 2 m/s for figures in metres)")
     t.add_argument("--verify-tol", type=float, default=1e-6,
-                   help="allowed deviation from the traced arcs as a fraction of the figure size (default 1e-6)")
+                   help="allowed deviation from the traced pieces as a fraction of the figure size (default 1e-6)")
     t.add_argument("--rests", choices=REST_POLICIES, default="auto",
                    help="rests at smooth joins: auto (where a section's replay fails verification, split it "
                         "and the sections before it at their middle join and try again), never, or joins "
@@ -79,7 +83,21 @@ def _resolve(args, name: str):
     from .sources import resolve
 
     return resolve(name, size=args.size, tol=args.tol, method=args.method, height=args.height, blade=args.blade,
-                   edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass)
+                   edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass,
+                   exact=args.exact)
+
+
+def _exact_summary(res) -> dict | None:
+    ex = res.exact
+    if ex is None:
+        return None
+    return {
+        "tol": res.exact_tol, "deviation": ex.deviation, "n_spirals": ex.n_spirals, "n_arcs": ex.n_arcs,
+        "n_lines": ex.n_lines, "message": ex.message,
+        "paths": [{"name": pf.name, "runs": len(pf.runs), "n_spirals": pf.n_spirals, "n_arcs": pf.n_arcs,
+                   "n_lines": pf.n_lines, "deviation": pf.deviation, "sampled": pf.sampled,
+                   "where": None if pf.where is None else list(pf.where)} for pf in ex.paths],
+    }
 
 
 def _fit_summary(res) -> dict:
@@ -96,6 +114,7 @@ def _fit_summary(res) -> dict:
             "min_count": pf.min_count,
             "corners_deg": [None if r.corner is None else math.degrees(r.corner) for r in pf.runs],
         } for pf in fit.paths],
+        "exact": _exact_summary(res),
         "figure": res.figure.to_dict(),
     }
 
@@ -137,8 +156,12 @@ def _fit(args) -> int:
         where = "" if pf.where is None else f"({pf.where.x:.4g}, {pf.where.y:.4g})"
         print(f"{i:>4} {pf.name[:16]:>16} {len(pf.runs):>5} {pf.n_arcs:>5} {pf.n_lines:>6} {pf.greedy_count:>7} "
               f"{'-' if pf.min_count is None else pf.min_count:>5} {pf.hausdorff:>10.3g} {where:>22}")
-    print(f"certified Hausdorff distance {fit.hausdorff:.3g} <= tolerance {res.tol:.3g} {res.unit}; "
-          f"wrote {', '.join(p.name for p in paths)} to {out}/ in {time.perf_counter() - t0:.1f} s")
+    print(f"arc mode: certified Hausdorff distance {fit.hausdorff:.3g} <= tolerance {res.tol:.3g} {res.unit}")
+    if res.exact is not None:
+        ex = res.exact
+        print(f"exact mode: {ex.n_spirals} spirals, {ex.n_arcs} arcs, {ex.n_lines} lines within {ex.deviation:.3g} "
+              f"{res.unit} of the drawing (measured; tolerance {res.exact_tol:.3g})")
+    print(f"wrote {', '.join(p.name for p in paths)} to {out}/ in {time.perf_counter() - t0:.1f} s")
     return 0
 
 
@@ -193,15 +216,25 @@ def _trace(args) -> int:
         cl = c.closure()
         print(f"curve {c.name}: {'closed' if cl['closed'] else 'open'} (end-to-start gap {cl['position_gap']:.2e}, "
               f"heading gap {cl['heading_gap']:.2e} rad)")
-    print(f"max deviation from the traced arcs {report.max_deviation:.3e} {unit} (tolerance {report.tolerance:.3e}, "
-          f"figure size {report.figure_size:.4g}); max cusp speed {report.max_cusp_speed:.3e}")
+    print(f"max deviation from the traced pieces {report.max_deviation:.3e} {unit} (tolerance "
+          f"{report.tolerance:.3e}, figure size {report.figure_size:.4g}); max cusp speed {report.max_cusp_speed:.3e}")
     ok = trace.success and report.success
     if res.fit is not None:
-        bound = res.fit.hausdorff + report.max_deviation
-        allowed = res.tol + args.verify_tol * report.figure_size
+        size = report.figure_size
+        if res.exact is not None:
+            bound = res.exact.deviation + report.max_deviation
+            allowed = res.exact_tol + args.verify_tol * size
+            print(f"arc mode would deviate from the drawing by up to {res.fit.hausdorff:.3e} {unit} (certified arc "
+                  f"fit, {res.fit.n_arcs} arcs, {res.fit.n_lines} lines) plus its replay")
+            print(f"exact mode: deviation from the drawing <= {bound:.3e} {unit} (curvature splines "
+                  f"{res.exact.deviation:.3e} + replay {report.max_deviation:.3e}); allowed {allowed:.3e} "
+                  f"(exact tolerance + {args.verify_tol:g} x size)")
+        else:
+            bound = res.fit.hausdorff + report.max_deviation
+            allowed = res.tol + args.verify_tol * size
+            print(f"deviation from the drawing <= {bound:.3e} {unit} (certified fit {res.fit.hausdorff:.3e} + replay "
+                  f"{report.max_deviation:.3e}); allowed {allowed:.3e} (fit tolerance + {args.verify_tol:g} x size)")
         ok = ok and bound <= allowed
-        print(f"deviation from the drawing <= {bound:.3e} {unit} (certified fit {res.fit.hausdorff:.3e} + replay "
-              f"{report.max_deviation:.3e}); allowed {allowed:.3e} (fit tolerance + {args.verify_tol:g} x size)")
     print(f"verification: {report.status} ({report.message}); wrote {out}/ in {elapsed:.1f} s")
     return 0 if ok else 1
 

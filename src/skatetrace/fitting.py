@@ -50,7 +50,7 @@ from .geometry import Pose, Segment, advance
 
 __all__ = [
     "Span", "Run", "split_path", "biarc", "Knot", "Where", "FittedRun", "FitStatus", "PathFit", "DrawingFit",
-    "fit_path", "fit_drawing", "figure_from_fit",
+    "fit_path", "fit_drawing", "figure_from_fit", "corner_join",
 ]
 
 # Relative to the path's size unless said otherwise.
@@ -1346,6 +1346,30 @@ class Where(NamedTuple):
     distance: float
 
 
+def corner_join(corner: float | None, reverse_above_deg: float = 90.0) -> Join | None:
+    """The figure join for a run's ``corner`` (as :attr:`Run.corner`); ``None`` if there is none.
+
+    ``0.0`` is a smooth join. Otherwise a cusp join: if ``|corner|`` exceeds ``reverse_above_deg``
+    the blade reverses (a true cusp) and pivots by ``remainder(corner - pi, 2 pi)``, else it pivots
+    by ``corner``; either way the travel direction after the join has turned by ``corner``.
+
+    Examples
+    --------
+    >>> corner_join(None) is None, corner_join(0.0) == SMOOTH
+    (True, True)
+    >>> j = corner_join(0.75 * math.pi)
+    >>> j.kind, round(math.degrees(j.pivot), 9), j.reverse
+    ('cusp', -45.0, True)
+    """
+    if corner is None:
+        return None
+    if corner == 0.0:
+        return SMOOTH
+    if abs(corner) > math.radians(reverse_above_deg):
+        return Join("cusp", math.remainder(corner - math.pi, _TWO_PI), True)
+    return Join("cusp", corner)
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class FittedRun:
     """One run replaced by arcs and lines joined tangentially.
@@ -1382,14 +1406,8 @@ class FittedRun:
         return _chain_poses(self.start, self.segments)
 
     def join(self, reverse_above_deg: float = 90.0) -> Join | None:
-        """The figure join at the corner before this run (``None`` if there is none)."""
-        if self.corner is None:
-            return None
-        if self.corner == 0.0:
-            return SMOOTH
-        if abs(self.corner) > math.radians(reverse_above_deg):
-            return Join("cusp", math.remainder(self.corner - math.pi, _TWO_PI), True)
-        return Join("cusp", self.corner)
+        """The figure join at the corner before this run (``None`` if there is none); see :func:`corner_join`."""
+        return corner_join(self.corner, reverse_above_deg)
 
 
 class FitStatus(Enum):
@@ -1680,25 +1698,37 @@ def figure_from_fit(fit: PathFit | DrawingFit, *, name: str, params=None, revers
     >>> [(j.kind, round(math.degrees(j.pivot), 6), j.reverse) for j in fig.curves[0].joins]
     [('cusp', -26.565051, True)]
     """
-    if not (isinstance(reverse_above_deg, (int, float)) and 0 <= reverse_above_deg <= 180):
-        raise FitError(f"reverse_above_deg must be in [0, 180], got {reverse_above_deg!r}")
+    _check_reverse(reverse_above_deg)
     paths = fit.paths if isinstance(fit, DrawingFit) else (fit,)
     if not fit.success:
         raise FitError(f"cannot make a figure from a failed fit: {fit.message}")
-    curves = []
-    for pf in paths:
-        segs: list[Segment] = []
-        joins: list[Join] = []
-        for i, run in enumerate(pf.runs):
-            if i > 0:
-                joins.append(run.join(reverse_above_deg))
-            joins.extend([SMOOTH] * (len(run.segments) - 1))
-            segs.extend(run.segments)
-        closing = pf.runs[0].join(reverse_above_deg) if pf.closed else None
-        curves.append(Curve(tuple(segs), tuple(joins), 1, closing, pf.runs[0].start, pf.name))
+    curves = _figure_curves(paths, reverse_above_deg, lambda run: run.segments)
     tols = sorted({p.tol for p in paths})
     return Figure(name, tuple(curves), params, provenance=(
         f"arc-spline fit ({paths[0].method}) within a certified Hausdorff distance of "
         f"{max(p.hausdorff for p in paths):.3g} (tol {', '.join(f'{t:.3g}' for t in tols)})"),
         extra={"fit": {"tol": tols[-1], "hausdorff": max(p.hausdorff for p in paths),
                        "n_arcs": sum(p.n_arcs for p in paths), "n_lines": sum(p.n_lines for p in paths)}})
+
+
+def _check_reverse(reverse_above_deg) -> None:
+    if not (isinstance(reverse_above_deg, (int, float)) and 0 <= reverse_above_deg <= 180):
+        raise FitError(f"reverse_above_deg must be in [0, 180], got {reverse_above_deg!r}")
+
+
+def _figure_curves(paths, reverse_above_deg: float, pieces_of) -> list[Curve]:
+    """One curve per fitted path: a run's pieces (``pieces_of(run)``) joined smoothly, a
+    :func:`corner_join` before every later run, and for a closed path the first run's join as closing."""
+    curves = []
+    for pf in paths:
+        pieces: list = []
+        joins: list[Join] = []
+        for i, run in enumerate(pf.runs):
+            items = tuple(pieces_of(run))
+            if i > 0:
+                joins.append(corner_join(run.corner, reverse_above_deg))
+            joins.extend([SMOOTH] * (len(items) - 1))
+            pieces.extend(items)
+        closing = corner_join(pf.runs[0].corner, reverse_above_deg) if pf.closed else None
+        curves.append(Curve(tuple(pieces), tuple(joins), 1, closing, pf.runs[0].start, pf.name))
+    return curves

@@ -103,10 +103,15 @@ class Spiral(NamedTuple):
         """Largest ``|kappa|`` on the piece (at the ends or a stationary point of the cubic)."""
         c0, c1, c2, c3 = self.coefficients
         cand = [0.0, self.length]
-        for r in np.roots([3.0 * c3, 2.0 * c2, c1]) if (c3 or c2 or c1) else []:
-            if abs(r.imag) < 1e-12 * max(1.0, abs(r)) and 0.0 < r.real < self.length:
-                cand.append(float(r.real))
-        return float(np.max(np.abs(self.curvature_at(np.array(cand)))))
+        # stationary points: roots of 3 c3 x^2 + 2 c2 x + c1
+        if c3 != 0.0:
+            disc = c2 * c2 - 3.0 * c1 * c3
+            if disc >= 0.0:
+                q = -(c2 + math.copysign(math.sqrt(disc), c2))  # stable quadratic roots
+                cand += [q / (3.0 * c3)] + ([c1 / q] if q != 0.0 else [])
+        elif c2 != 0.0:
+            cand.append(-c1 / (2.0 * c2))
+        return max(abs(float(self.curvature_at(x))) for x in cand if 0.0 <= x <= self.length)
 
     def part(self, s0: float, s1: float) -> "Spiral":
         """The stretch from ``s0`` to ``s1`` (arc lengths from the start), coefficients re-expanded."""

@@ -8,7 +8,9 @@ A figure can be named as
 - a figure JSON file (``skatetrace.figure/1``): exact arcs as written;
 - a drawing: an SVG file or a point list (``.csv``, ``.txt``, ``.dat``), or a
   :class:`~skatetrace.curves.Drawing` made in Python; it is scaled to ``size`` and fitted by arc
-  splines within ``tol`` (a certified Hausdorff distance).
+  splines within ``tol`` (a certified Hausdorff distance). In *exact mode* (``exact=...``) its
+  smooth runs are instead traced as curvature splines (:mod:`skatetrace.exact`) within a far
+  smaller distance; the arc fit is still made, so that both deviations can be shown.
 
 :func:`resolve` returns the figure with the fit (if any), the unit of length and notes. The CLI and
 notebooks share it.
@@ -26,11 +28,16 @@ from .figure import Figure, load_figure
 from .model import SleighParams
 from .patterns import pattern, pattern_names
 
-__all__ = ["Resolved", "resolve", "DRAWING_SUFFIXES", "DEFAULT_REL_TOL"]
+__all__ = ["Resolved", "resolve", "DRAWING_SUFFIXES", "DEFAULT_REL_TOL", "DEFAULT_EXACT_REL_TOL"]
 
 DRAWING_SUFFIXES = (".svg", ".csv", ".txt", ".dat")
 #: Fitting tolerance, as a fraction of the figure's size, when none is given.
 DEFAULT_REL_TOL = 1e-3
+#: Exact mode's tolerance for the curvature spline, as a fraction of the figure's size: a tenth of
+#: the default verification tolerance, so that the replay, not the representation, limits the match.
+DEFAULT_EXACT_REL_TOL = 1e-7
+#: Arc mode's corner tolerance (degrees): joins turning by less are smooth. Exact mode uses less.
+EXACT_MAX_CORNER_DEG = 0.5
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -49,7 +56,11 @@ class Resolved:
     drawing : Drawing or None
         For drawings: the drawing as fitted (after scaling).
     tol : float or None
-        The fitting tolerance used (figure units).
+        The arc-fitting tolerance used (figure units).
+    exact : ExactDrawingFit or None
+        Exact mode: the curvature splines the figure is made of, with their measured deviation.
+    exact_tol : float or None
+        Exact mode: the tolerance of the curvature splines (figure units).
     notes : tuple of str
     """
 
@@ -59,7 +70,21 @@ class Resolved:
     fit: object | None = None
     drawing: Drawing | None = None
     tol: float | None = None
+    exact: object | None = None
+    exact_tol: float | None = None
     notes: tuple = field(default=())
+
+    @property
+    def representation_error(self) -> float | None:
+        """Distance bound between the traced figure's pieces and the drawing (``None`` if not a drawing)."""
+        if self.exact is not None:
+            return self.exact.deviation
+        return None if self.fit is None else self.fit.hausdorff
+
+    @property
+    def representation_tol(self) -> float | None:
+        """Tolerance of the traced figure's pieces (the exact tolerance in exact mode)."""
+        return self.exact_tol if self.exact is not None else self.tol
 
 
 def _size(size) -> tuple[float | None, str | None]:
@@ -77,9 +102,9 @@ def _size(size) -> tuple[float | None, str | None]:
         raise SkatetraceError(f"size: {exc}") from None
 
 
-def _tol(tol, unit: str, size: float) -> float:
+def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL) -> float:
     if tol is None:
-        return DEFAULT_REL_TOL * size
+        return default * size
     if isinstance(tol, (int, float)) and not isinstance(tol, bool):
         value, tunit = float(tol), unit
     else:
@@ -101,7 +126,7 @@ def _tol(tol, unit: str, size: float) -> float:
 
 def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "greedy", height: float = 1.7,
             blade: float = 0.28, edge: str = "outside", direction: str = "forward", foot: str = "right",
-            body_mass: float = 60.0) -> Resolved:
+            body_mass: float = 60.0, exact=None) -> Resolved:
     """Turn a name, a file or a drawing into a figure to trace.
 
     Parameters
@@ -116,6 +141,10 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
         unit (``"1mm"``). Default ``1e-3`` of the figure's size.
     method : {"greedy", "min"}
         Arc-spline fit (:func:`skatetrace.fitting.fit_drawing`).
+    exact : None, True, str or float
+        Drawings only: trace the smooth runs exactly, as curvature splines
+        (:func:`skatetrace.exact.fit_exact_drawing`), within this distance (as ``tol``; ``True``:
+        ``1e-7`` of the figure's size). ``None`` or ``False``: arcs and lines.
     height, blade, edge, direction, foot : school figures (:func:`skatetrace.school.school_figure`).
     body_mass : float
         kg, for the SI skater preset used with figures in metres.
@@ -129,7 +158,7 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
     from .presets import skater_params
 
     if isinstance(spec, Drawing):
-        return _drawing(spec, size, tol, method, body_mass, height)
+        return _drawing(spec, size, tol, method, body_mass, height, exact)
     name = str(spec)
     if name.startswith("school:"):
         from .school import school_figure
@@ -137,23 +166,36 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
         fig = school_figure(name.split(":", 1)[1], height=height, blade=blade, edge=edge, direction=direction,
                             foot=foot, params=skater_params(body_mass, height))
         return Resolved(figure=fig, kind="school", unit="m",
-                        notes=(f"school figure for a skater {height:g} m tall, {body_mass:g} kg (SI units)",))
+                        notes=(f"school figure for a skater {height:g} m tall, {body_mass:g} kg (SI units)",
+                               *_exact_note(exact)))
     if name in pattern_names():
-        return Resolved(figure=pattern(name), kind="pattern", unit="model")
+        return Resolved(figure=pattern(name), kind="pattern", unit="model", notes=_exact_note(exact))
     path = Path(name)
     suffix = path.suffix.lower()
     if suffix in DRAWING_SUFFIXES:
         from .inputs import load_drawing
 
-        return _drawing(load_drawing(path), size, tol, method, body_mass, height)
+        return _drawing(load_drawing(path), size, tol, method, body_mass, height, exact)
     if suffix == ".json" or path.exists():
-        return Resolved(figure=load_figure(path), kind="json", unit="model")
+        return Resolved(figure=load_figure(path), kind="json", unit="model", notes=_exact_note(exact))
     raise SkatetraceError(
         f"unknown figure {name!r}: not a built-in ({', '.join(pattern_names())}), not school:NAME "
         f"(see 'skatetrace figures') and no such file (.json figure, or a drawing: {', '.join(DRAWING_SUFFIXES)})")
 
 
-def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float) -> Resolved:
+def _merged(fig: Figure) -> Figure:
+    """The figure with consecutive arcs of one radius made one piece (they trace faster as one)."""
+    return Figure(fig.name, tuple(c.merged() for c in fig.curves), fig.params, fig.description, fig.provenance,
+                  fig.extra)
+
+
+def _exact_note(exact) -> tuple[str, ...]:
+    if exact is None or exact is False:
+        return ()
+    return ("exact mode applies to drawings; this figure's arcs, lines and spirals are traced as given",)
+
+
+def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float, exact=None) -> Resolved:
     from .fitting import figure_from_fit, fit_drawing
     from .presets import skater_params
 
@@ -171,9 +213,30 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     if not fit.success:
         raise SkatetraceError(f"could not fit {drawing.name!r} within {tol_v:.3g}: {fit.message}")
     params = skater_params(body_mass, height) if unit == "m" else SleighParams()
-    fig = figure_from_fit(fit, name=drawing.name, params=params)
-    fig = Figure(fig.name, tuple(c.merged() for c in fig.curves), fig.params, fig.description, fig.provenance,
-                 fig.extra)
-    notes.append(f"fitted by {fit.n_arcs} arcs and {fit.n_lines} lines within {fit.hausdorff:.3g} "
+    notes.append(f"arc mode: {fit.n_arcs} arcs and {fit.n_lines} lines within {fit.hausdorff:.3g} "
                  f"(certified; tolerance {tol_v:.3g} {unit})")
-    return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v, notes=tuple(notes))
+    if exact is None or exact is False:
+        fig = _merged(figure_from_fit(fit, name=drawing.name, params=params))
+        return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v,
+                        notes=tuple(notes))
+    from .exact import figure_from_exact, fit_exact_drawing
+
+    exact_v = _tol(None if exact is True else exact, unit, fsize, DEFAULT_EXACT_REL_TOL)
+    # A join whose tangent turns by delta displaces the rest of the path by about delta times its
+    # length, so in exact mode any kink that could cost a tenth of the tolerance is a corner.
+    length = sum(p.length() for p in drawing.paths)
+    corner_tol = min(EXACT_MAX_CORNER_DEG, math.degrees(exact_v / (10.0 * length)))
+    ex = fit_exact_drawing(drawing, exact_v, corner_tol_deg=corner_tol)
+    if not ex.success:
+        raise SkatetraceError(f"could not represent {drawing.name!r} exactly within {exact_v:.3g}: {ex.message}")
+    fig = _merged(figure_from_exact(ex, name=drawing.name, params=params))
+    notes.append(f"exact mode: {ex.n_spirals} spirals, {ex.n_arcs} arcs and {ex.n_lines} lines within "
+                 f"{ex.deviation:.3g} (measured; tolerance {exact_v:.3g} {unit})")
+    kinks = [abs(r.corner) for pf in ex.paths for r in pf.runs
+             if r.corner is not None and 0.0 < abs(r.corner) <= math.radians(EXACT_MAX_CORNER_DEG)]
+    if kinks:
+        notes.append(f"exact mode: {len(kinks)} join(s) of the drawing are not tangent-continuous (they turn by "
+                     f"up to {math.degrees(max(kinks)):.2g} degrees); the skater stops and pivots there, where "
+                     "arc mode glides through")
+    return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v, exact=ex,
+                    exact_tol=exact_v, notes=tuple(notes))

@@ -167,13 +167,14 @@ class SectionTrace:
             return t_local - ph.maneuver.duration  # duration < 0: t in [tau, 0] -> [0, -tau]
         return ph.t0 + t_local
 
-    def evaluate(self, t, side: str = "right") -> dict[str, np.ndarray]:
+    def evaluate(self, t, side: str = "right", geometry: bool = True) -> dict[str, np.ndarray]:
         """State and controls at physical section times ``t`` (1-D array).
 
         Returns a dict of arrays: ``p1, p2, theta, x, y, a, b, adot, bdot, s, xi1, xi2`` and
         ``segment`` (index of the piece within the section). At a breakpoint, where the control
         rates jump, ``side="right"`` gives the limit from after it (the phase or leg that starts
-        there) and ``side="left"`` the limit from before it.
+        there) and ``side="left"`` the limit from before it. ``geometry=False`` leaves out
+        ``theta, x, y`` (laying spirals out is the costly part, and sampling needs only controls).
         """
         if side not in ("left", "right"):
             raise ValueError(f"side must be 'left' or 'right', got {side!r}")
@@ -239,26 +240,27 @@ class SectionTrace:
         # physical scaling: momenta and rates scale with the speed
         for k in ("p1", "p2", "adot", "bdot"):
             out[k] *= V
-        return self._finish(out, seg)
+        return self._finish(out, seg, geometry)
 
-    def _finish(self, out: dict[str, np.ndarray], seg: np.ndarray) -> dict[str, np.ndarray]:
-        pieces = self.section.pieces
-        ends = np.cumsum([p.segment.length for p in pieces])
-        s = np.clip(out["s"], 0.0, ends[-1])
-        x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
-        starts = np.concatenate([[0.0], ends[:-1]])
-        for i, p in enumerate(pieces):
-            m = seg == i
-            if np.any(m):
-                local = np.clip(s[m] - starts[i], 0.0, p.segment.length)
-                xs, ys, hs = travel(p.start, p.segment, local)
-                x[m], y[m], heading[m] = xs, ys, hs
+    def _finish(self, out: dict[str, np.ndarray], seg: np.ndarray, geometry: bool = True) -> dict[str, np.ndarray]:
         d = self.direction
+        if geometry:
+            pieces = self.section.pieces
+            ends = np.cumsum([p.segment.length for p in pieces])
+            s = np.clip(out["s"], 0.0, ends[-1])
+            x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
+            starts = np.concatenate([[0.0], ends[:-1]])
+            for i, p in enumerate(pieces):
+                m = seg == i
+                if np.any(m):
+                    local = np.clip(s[m] - starts[i], 0.0, p.segment.length)
+                    xs, ys, hs = travel(p.start, p.segment, local)
+                    x[m], y[m], heading[m] = xs, ys, hs
+            out.update(theta=heading + (math.pi if d < 0 else 0.0), x=x, y=y)
         if d < 0:
             for k in ("a", "b", "adot", "bdot", "p2"):
                 out[k] = -out[k]
-            heading = heading + math.pi
-        out.update(theta=heading, x=x, y=y, segment=seg)
+        out["segment"] = seg
         xi1, xi2, _ = velocities(self.params, out["p1"], out["p2"], out["a"], out["b"], out["adot"], out["bdot"])
         out["xi1"], out["xi2"] = xi1, xi2
         return out
@@ -275,7 +277,7 @@ class SectionTrace:
         lo, hi = np.zeros(flat.size), np.full(flat.size, self.duration)
         for _ in range(100):
             mid = 0.5 * (lo + hi)
-            below = self.evaluate(mid)["s"] < flat
+            below = self.evaluate(mid, geometry=False)["s"] < flat
             lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
         bps = self.breakpoints()
         near = bps[np.argmin(np.abs(bps[:, None] - hi[None, :]), axis=0)]

@@ -48,9 +48,9 @@ def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, 
             # limit from the left, the next interval's first row the limit from the right.
             def fn(tt, _hi=hi):
                 left = tt >= _hi
-                v = sec.evaluate(tt)
+                v = sec.evaluate(tt, geometry=False)
                 if np.any(left):
-                    vl = sec.evaluate(tt[left], side="left")
+                    vl = sec.evaluate(tt[left], side="left", geometry=False)
                     for k in v:
                         v[k][left] = vl[k]
                 return v["a"], v["b"], v["adot"], v["bdot"]
