@@ -15,7 +15,9 @@ the leg started::
     kappa(sigma) = c0 + c1 sigma + c2 sigma^2 + c3 sigma^3,    sigma = |s| - s_start,
 
 with ``s_start`` the previous leg's switch length (0 for the first leg); a leg of constant
-curvature is ``c1 = c2 = c3 = 0``. The curvature condition ``xi1 = kappa(s) xi2`` is algebraic, so
+curvature is ``c1 = c2 = c3 = 0``. A leg that begins where the curvature jumps starts with scipy's
+initial step, as a new ``solve_ivp`` call would; one that continues the curvature (a chain of
+spirals) keeps the step size the previous leg proposed, which saves most of a restart per join. The curvature condition ``xi1 = kappa(s) xi2`` is algebraic, so
 only ``kappa(s)`` (not its derivative) enters the right-hand side, the events and the step control.
 Two terminal events may be armed: the speed along the blade vanishing (``"stopped"``) and the mass
 coming within a distance of the singular point ``(0, -kappa(s) I / M)`` (``"singular"``).
@@ -240,6 +242,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
     g_old = np.empty(3)
     g_new = np.empty(3)
     F_none = np.zeros((_POWER, n))  # stands for "no dense output" on steps that need none
+    h_abs = 0.0
     for leg in range(nlegs):
         coef = kappas[leg]  # a view: (c0, c1, c2, c3) of this leg
         s0 = switches[leg - 1] if leg > 0 else 0.0  # |s| where this leg starts
@@ -248,8 +251,17 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
             return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
         nfev += 1
         _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g_old)
-        h_abs = _initial_step(M, m, I, coef, s0, alpha, t, y, f, t_end, direction, rtol, atol)
-        nfev += 1
+        # Where the curvature is continuous across the join (a chain of spirals) the right-hand side
+        # is too, and the step size the last leg proposed carries over; where it jumps the control
+        # rates jump, and the step is chosen afresh as scipy would for a new solve_ivp call.
+        smooth = False
+        if leg > 0:
+            s_prev = switches[leg - 2] if leg > 1 else 0.0
+            k_end = _curvature(kappas[leg - 1], s_prev, s0)
+            smooth = abs(k_end - coef[0]) <= 1e-12 * max(abs(k_end), abs(coef[0]), 1e-300)
+        if not smooth:
+            h_abs = _initial_step(M, m, I, coef, s0, alpha, t, y, f, t_end, direction, rtol, atol)
+            nfev += 1
         while True:
             if direction * (t_end - t) <= 0.0:
                 leg_bounds[leg + 1] = t

@@ -215,24 +215,29 @@ class SectionTrace:
             vals = {k: np.empty(tl.size) for k in out}
             vseg = np.empty(tl.size, dtype=int)
             step = -1 if ph.kind == "launch" else 1
-            index = {id(leg): g + step * j for j, leg in enumerate(man.legs)}
-            # At a shared boundary the leg on the requested side must win, so it is written last.
-            # In section time the legs run in list order forwards and reversed for a launch.
-            legs = man.legs if ph.kind != "launch" else man.legs[::-1]
-            if not right:
-                legs = legs[::-1]
+            # The legs in section-time order (reversed for a launch) cover [lo, hi] in local time
+            # one after the other. At a shared boundary the leg on the requested side wins: on the
+            # right the last leg starting at or before t, on the left the first ending at or after t.
+            order = range(len(man.legs)) if ph.kind != "launch" else range(len(man.legs) - 1, -1, -1)
+            legs = [man.legs[j] for j in order]
+            segidx = [g + step * j for j in order]
+            los = np.array([min(leg.t0, leg.t1) for leg in legs])
+            his = np.array([max(leg.t0, leg.t1) for leg in legs])
             eps = 1e-12 * max(1.0, abs(man.duration))  # section time -> local time loses a few ulps
-            for leg in legs:
-                lo, hi = min(leg.t0, leg.t1), max(leg.t0, leg.t1)
-                m = (tl >= lo - eps) & (tl <= hi + eps)
-                if not np.any(m):
-                    continue
-                y = leg.sol(np.clip(tl[m], lo, hi))
+            if right:
+                which = np.searchsorted(los, tl + eps, side="right") - 1
+            else:
+                which = np.searchsorted(his, tl - eps, side="left")
+            which = np.clip(which, 0, len(legs) - 1)
+            for j in np.unique(which):
+                leg, m = legs[j], which == j
+                tj = np.clip(tl[m], los[j], his[j])
+                y = leg.sol(tj)
                 ad, bd, _ = constrained_rates(self.params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3],
-                                              man.control(np.clip(tl[m], lo, hi)))
+                                              man.control(tj))
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
                     vals[key][m] = val
-                vseg[m] = index[id(leg)]
+                vseg[m] = segidx[j]
             vals["s"] = ph.s0 + (vals["s"] - (man.end[4] if ph.kind == "launch" else 0.0))
             for k in out:
                 out[k][sel] = vals[k]

@@ -261,7 +261,9 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             sections.append({"section": si, "traced": False, "passed": False, "message": sec.message})
             continue
         pts = rep.state[3:5, m]
-        d_to = np.full(pts.shape[1], np.inf)
+        # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
+        on_curve = np.hstack([segment_points(p.start, p.segment, 65) for p in sec.section.pieces])
+        d_to = cKDTree(on_curve.T).query(pts.T)[0]
         d_from = np.zeros(0)
         for p in sec.section.pieces:
             d_to = _nearer(d_to, pts, p)
