@@ -539,6 +539,7 @@ def test_from_function_errors(kwargs, match):
     ("6m", 6.0, "m"), ("6 m", 6.0, "m"), ("600cm", 6.0, "m"), ("6000mm", 6.0, "m"),
     ("20ft", 6.096, "m"), ("240in", 6.096, "m"), ("6", 6.0, "model"), ("6u", 6.0, "model"),
     (" 2.5 M ", 2.5, "m"), ("1e1cm", 0.1, "m"), (".5m", 0.5, "m"), ("7.", 7.0, "model"),
+    ("10um", 1e-5, "m"), ("10 \u00b5m", 1e-5, "m"), ("0.5\u03bcm", 5e-7, "m"),
 ])
 def test_parse_length(text, value, unit):
     got_value, got_unit = parse_length(text)

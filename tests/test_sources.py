@@ -116,3 +116,66 @@ def test_cli_traces_a_drawing_end_to_end(tmp_path, capsys):
     assert rep["success"] and rep["max_deviation"] <= 1e-6 * rep["figure_size"]
     assert fit["hausdorff_certified"] + rep["max_deviation"] <= 1e-3 + 1e-6 * rep["figure_size"]
     assert len(fit["figure"]["curves"][0]["pieces"]) == 1
+
+
+# --------------------------------------------------------------------------------------------------
+# exact mode
+# --------------------------------------------------------------------------------------------------
+def test_exact_mode_builds_spirals_within_its_tolerance_and_keeps_the_arc_fit():
+    from skatetrace.geometry import Spiral
+
+    r = resolve(str(EXAMPLES / "serpentine.svg"), size="6m", tol="1mm", exact=True)
+    assert r.exact is not None and r.exact.success
+    assert r.exact_tol == pytest.approx(1e-7 * r.drawing.size())
+    assert r.exact.deviation <= r.exact_tol
+    assert r.representation_error == r.exact.deviation and r.representation_tol == r.exact_tol
+    # the arc fit is still made, for comparison, and is far coarser
+    assert r.fit is not None and r.fit.success and r.fit.hausdorff > 100 * r.exact.deviation
+    pieces = [p for c in r.figure.curves for p in c.pieces]
+    assert sum(isinstance(p, Spiral) for p in pieces) == r.exact.n_spirals > 0
+    assert any("exact mode" in n for n in r.notes) and any("arc mode" in n for n in r.notes)
+    # an explicit tolerance with a unit
+    loose = resolve(str(EXAMPLES / "serpentine.svg"), size="6m", exact="10um")
+    assert loose.exact_tol == pytest.approx(1e-5)
+    assert loose.exact.deviation <= 1e-5 and loose.exact.n_spirals < r.exact.n_spirals
+
+
+def test_exact_mode_turns_kinks_of_the_drawing_into_corners():
+    # three-turn.svg joins its Beziers with kinks of about 0.002 degrees: arc mode glides through
+    # them, exact mode cannot (the offset would grow along the rest of the path), so it stops there.
+    arc = resolve(str(EXAMPLES / "three-turn.svg"), size="6m", tol="1mm")
+    ex = resolve(str(EXAMPLES / "three-turn.svg"), size="6m", tol="1mm", exact=True)
+    assert len(ex.figure.curves[0].sections()) > len(arc.figure.curves[0].sections())
+    assert ex.exact.deviation <= ex.exact_tol
+    assert any("not tangent-continuous" in n for n in ex.notes)
+
+
+def test_exact_mode_on_an_exact_figure_is_a_note():
+    r = resolve("double-flower", exact=True)
+    assert r.exact is None and any("exact mode applies to drawings" in n for n in r.notes)
+
+
+def test_exact_mode_impossible_tolerance_is_a_clear_error():
+    with pytest.raises(SkatetraceError, match="could not represent .* exactly within"):
+        resolve(str(EXAMPLES / "serpentine.svg"), size="6m", exact="1e-15m")
+
+
+def test_cli_traces_a_drawing_in_exact_mode(tmp_path, capsys):
+    svg = tmp_path / "s.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                   '<path d="M 0 50 C 30 90, 70 10, 100 50"/></svg>')
+    out = tmp_path / "t"
+    code = main(["trace", str(svg), "--size", "4", "--exact", "--out", str(out), "--no-plots"])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    rep = json.loads((out / "report.json").read_text())
+    fit = json.loads((out / "fit.json").read_text())
+    ex = fit["exact"]
+    assert rep["success"] and ex["n_spirals"] > 0 and ex["deviation"] <= ex["tol"] == pytest.approx(4e-7)
+    assert ex["deviation"] + rep["max_deviation"] <= ex["tol"] + 1e-6 * rep["figure_size"]
+    assert fit["hausdorff_certified"] > 10 * ex["deviation"]  # both deviations are reported
+    assert "exact mode: deviation from the drawing" in text and "arc mode would deviate" in text
+    types = {p["type"] for c in fit["figure"]["curves"] for p in c["pieces"]}
+    assert "spiral" in types
+    result = json.loads((out / "result.json").read_text())
+    assert any(p.get("curvature_coefficients") for s in result["sections"] for p in s["pieces"])

@@ -753,8 +753,9 @@ def from_function(fn: Callable, u0: float, u1: float, *, closed: bool = False, d
 # ----------------------------------------------------------------------------------------------------
 # Lengths and files
 # ----------------------------------------------------------------------------------------------------
-_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "ft": 0.3048, "in": 0.0254, "u": None, "": None}
-_LENGTH = re.compile(r"\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-z]*)\s*")
+_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "um": 1e-6, "\u00b5m": 1e-6, "\u03bcm": 1e-6, "ft": 0.3048,
+          "in": 0.0254, "u": None, "": None}
+_LENGTH = re.compile(r"\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-z\u00b5\u03bc]*)\s*")
 _LENGTH_FORMS = "'6m', '6 m', '600cm', '6000mm', '20ft', '240in', '6' or '6u' (model units)"
 
 
@@ -764,8 +765,8 @@ def parse_length(text: str) -> tuple[float, str]:
     Parameters
     ----------
     text : str
-        A positive number with an optional unit: ``m``, ``cm``, ``mm``, ``ft``, ``in``; ``u`` or
-        no unit for model units. Space between number and unit is allowed; case is ignored.
+        A positive number with an optional unit: ``m``, ``cm``, ``mm``, ``um`` (or ``µm``, micrometres,
+        for exact mode's tolerances), ``ft``, ``in``; ``u`` or no unit for model units. Space between number and unit is allowed; case is ignored.
 
     Returns
     -------
