@@ -63,7 +63,8 @@ def _parser() -> argparse.ArgumentParser:
                         "(at every smooth join); default auto")
     t.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     _add_source_args(t)
-    f = sub.add_parser("fit", help="fit a drawing by arcs and lines only: pieces, arcs, certified tolerance, plot")
+    f = sub.add_parser("fit", help="fit a drawing by arcs and lines (and, with --exact, curvature splines) "
+                                   "without tracing: pieces, certified tolerance, plot")
     f.add_argument("drawing", help="an SVG file or a point list (.csv, .txt, .dat)")
     f.add_argument("--out", default="fit", help="output folder for fit.json and fit.png (default: fit)")
     f.add_argument("--no-plots", action="store_true", help="skip fit.png")
