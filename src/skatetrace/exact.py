@@ -743,12 +743,12 @@ def fit_exact_drawing(drawing: Drawing, tol: float, *, corner_tol_deg: float = 0
 
     Examples
     --------
-    >>> from skatetrace.curves import LinePiece
-    >>> zig = Path((LinePiece((0.0, 0.0), (1.0, 0.0)), LinePiece((1.0, 0.0), (1.0, 1.0))))
-    >>> fit = fit_exact_drawing(Drawing((zig,)), 1e-9)
-    >>> fit.success, fit.n_lines, [None if r.corner is None else round(math.degrees(r.corner), 9)
-    ...                            for r in fit.paths[0].runs]
-    (True, 2, [None, 90.0])
+    >>> from skatetrace.curves import EllipticArcPiece, LinePiece
+    >>> quarter = EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.0, np.pi / 2)
+    >>> stem = LinePiece((0.0, 1.0), (-1.0, 1.0))
+    >>> fit = fit_exact_drawing(Drawing((Path((quarter, stem)),)), 1e-9)
+    >>> fit.success, fit.n_spirals > 10, fit.n_lines, fit.deviation <= 1e-9
+    (True, True, 1, True)
     """
     if not isinstance(drawing, Drawing):
         raise FitError(f"expected a skatetrace.curves.Drawing, got {type(drawing).__name__}")
