@@ -193,7 +193,7 @@ def _trace(args) -> int:
         print(f"note: rests added at smooth joins ({where}): sections failed to trace or their replay strayed "
               f"more than allowed; {done.rounds} trace-and-verify rounds")
     out = Path(args.out)
-    write_results(out, trace, schedule, states, report)
+    write_results(out, trace, schedule, states, report, unit=res.unit)
     if res.fit is not None:
         _write_fit(res, out, not args.no_plots)
     if not args.no_plots:

@@ -122,11 +122,14 @@ def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
 
 
 def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,
-                  states: dict[str, np.ndarray], report: VerificationReport | None) -> list[Path]:
-    """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``."""
+                  states: dict[str, np.ndarray], report: VerificationReport | None, unit: str = "model") -> list[Path]:
+    """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``.
+
+    ``unit`` (``"m"`` or ``"model"``) is recorded in ``result.json`` for the readers of the files.
+    """
     out = Path(out)
     written = []
-    atomic_write(out / "result.json", json.dumps(result_dict(trace), indent=2, allow_nan=False))
+    atomic_write(out / "result.json", json.dumps({**result_dict(trace), "unit": unit}, indent=2, allow_nan=False))
     written.append(out / "result.json")
     atomic_write(out / "controls.csv", _csv_text(schedule, states))
     written.append(out / "controls.csv")
