@@ -107,3 +107,45 @@ def test_rests_at_every_join_keep_the_path_and_are_reported(tmp_path, capsys):
     curve = json.loads((out / "result.json").read_text())["figure"]["curves"][0]
     assert curve["joins"] == [{"type": "cusp", "pivot_deg": 0.0}] * 2
     assert main(["trace", "s-bend", "--rests", "sometimes", "--out", str(out)]) == 2
+
+
+def test_animate_writes_gif_mp4_and_still_from_the_result_files(tmp_path, capsys):
+    import imageio_ffmpeg
+    from PIL import Image
+
+    out = tmp_path / "run"
+    assert main(["trace", "s-bend", "--out", str(out), "--no-plots"]) == 0
+    capsys.readouterr()
+    gif, mp4, png = tmp_path / "a.gif", tmp_path / "a.mp4", tmp_path / "a.png"
+    assert main(["animate", str(out / "result.json"), "-o", str(gif), "--fps", "5", "--duration", "2",
+                 "--size", "160x120"]) == 0
+    captured = capsys.readouterr()
+    assert "10 frames, 160x120 px" in captured.out and "10/10" in captured.err  # the progress bar
+    with Image.open(gif) as im:
+        assert im.n_frames == 10 and im.size == (160, 120)
+    assert main(["animate", str(out), "-o", str(mp4), "--fps", "5", "--duration", "2", "--size", "160x120"]) == 0
+    frames, _ = imageio_ffmpeg.count_frames_and_secs(str(mp4))
+    meta = next(imageio_ffmpeg.read_frames(str(mp4)))
+    assert frames == 10 and tuple(meta["size"]) == (160, 120)
+    assert main(["animate", str(out), "-o", str(png), "--time", "1.0", "--size", "160x120"]) == 0
+    with Image.open(png) as im:
+        assert im.size == (160, 120)
+    capsys.readouterr()
+    assert main(["animate", str(out), "-o", str(tmp_path / "a.avi")]) == 2
+    assert "must end in .gif or .mp4" in capsys.readouterr().err
+    assert main(["animate", str(tmp_path / "nothing"), "-o", str(gif)]) == 2
+    assert main(["animate", str(out), "-o", str(gif), "--size", "wide"]) == 2
+
+
+def test_trace_writes_the_viewer_and_view_rewrites_it(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["trace", "s-bend", "--out", str(out), "--no-plots"]) == 0
+    page = (out / "viewer.html").read_text(encoding="utf-8")
+    assert "s-bend" in page and "https://" not in page and 'type="application/json"' in page
+    assert main(["view", str(out), "-o", str(tmp_path / "v.html")]) == 0
+    assert "self-contained" in capsys.readouterr().out
+    assert (tmp_path / "v.html").read_text(encoding="utf-8") == page  # the same files, the same page
+    skip = tmp_path / "skip"
+    assert main(["trace", "s-bend", "--out", str(skip), "--no-plots", "--no-viewer"]) == 0
+    assert not (skip / "viewer.html").exists()
+    assert main(["view", str(tmp_path / "nothing")]) == 2

@@ -139,3 +139,16 @@ def test_search_bounds_the_placements_tried_after_the_first_that_works():
     assert none_more.glide == first.glide and none_more.nfev == first.nfev
     with pytest.raises(ValueError, match="search"):
         TraceOptions(search=-1)
+
+
+def test_add_rests_keeps_the_path_and_only_touches_the_named_curve():
+    a = Curve((Segment(1.0, 1.0), Segment(-1.0, 1.0), Segment(0.0, 1.0)), (SMOOTH, SMOOTH), name="a")
+    b = Curve((Segment(0.5, 1.0), Segment(0.0, 1.0)), (SMOOTH,), name="b")
+    fig = Figure("two", (a, b))
+    out = add_rests(fig, [(0, 2)])
+    assert out.curves[0].joins == (SMOOTH, REST) and out.curves[1] == b
+    for p, q in zip(fig.curves[0].layout(), out.curves[0].layout()):
+        assert tuple(p.start) == pytest.approx(tuple(q.start), abs=1e-14)
+    assert add_rests(fig, []) is fig
+    with pytest.raises(FigureFormatError, match="does not follow a smooth join"):
+        add_rests(fig, [(1, 0)])

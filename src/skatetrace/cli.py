@@ -1,4 +1,4 @@
-"""Command-line interface: ``skatetrace trace``, ``fit``, ``figures`` and ``reproduce``.
+"""Command-line interface: ``skatetrace trace``, ``fit``, ``animate``, ``view``, ``figures`` and ``reproduce``.
 
 The only module that prints or exits. Exit codes: 0 success, 1 a solve or verification that
 failed, 2 a usage error (bad arguments, unreadable or malformed figure file).
@@ -62,6 +62,7 @@ def _parser() -> argparse.ArgumentParser:
                         "and the sections before it at their middle join and try again), never, or joins "
                         "(at every smooth join); default auto")
     t.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    t.add_argument("--no-viewer", action="store_true", help="skip viewer.html (the self-contained HTML viewer)")
     _add_source_args(t)
     f = sub.add_parser("fit", help="fit a drawing by arcs and lines (and, with --exact, curvature splines) "
                                    "without tracing: pieces, certified tolerance, plot")
@@ -69,6 +70,17 @@ def _parser() -> argparse.ArgumentParser:
     f.add_argument("--out", default="fit", help="output folder for fit.json and fit.png (default: fit)")
     f.add_argument("--no-plots", action="store_true", help="skip fit.png")
     _add_source_args(f)
+    a = sub.add_parser("animate", help="a GIF or MP4 (or a PNG still) of a traced figure, from its result files")
+    a.add_argument("source", help="the output folder of 'skatetrace trace', or its result.json")
+    a.add_argument("-o", "--output", required=True, help="file to write: .gif, .mp4, or .png for one frame")
+    a.add_argument("--fps", type=float, default=25.0, help="frames per second (default 25)")
+    a.add_argument("--duration", type=float,
+                   help="length of the video in s (default: the figure's own time, kept within 8 to 30 s)")
+    a.add_argument("--size", default="800x800", help="WIDTHxHEIGHT in pixels (default 800x800)")
+    a.add_argument("--time", type=float, help="for a .png still: the figure's time to draw (default: 60%% through)")
+    v = sub.add_parser("view", help="one self-contained HTML file that plays a traced figure (no network needed)")
+    v.add_argument("source", help="the output folder of 'skatetrace trace', or its result.json")
+    v.add_argument("-o", "--output", help="HTML file to write (default: viewer.html in the source folder)")
     sub.add_parser("figures", help="list the built-in figures and the school figures")
     r = sub.add_parser("reproduce", help="reproduce the paper's tables three ways, with figures and errata")
     r.add_argument("--out", default="rep", help="output folder (default: rep)")
@@ -200,6 +212,11 @@ def _trace(args) -> int:
         from .plotting import save_all
 
         save_all(trace, report, out)
+    if not args.no_viewer:
+        from .playback import load_playback
+        from .viewer import write_viewer
+
+        write_viewer(load_playback(out), out / "viewer.html")
     elapsed = time.perf_counter() - t0
     unit = "m" if res.unit == "m" else "model units"
     print(f"figure {figure.name}: {len(figure.curves)} curve(s), {len(trace.sections)} section(s), "
@@ -238,6 +255,64 @@ def _trace(args) -> int:
         ok = ok and bound <= allowed
     print(f"verification: {report.status} ({report.message}); wrote {out}/ in {elapsed:.1f} s")
     return 0 if ok else 1
+
+
+def _pixels(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise SkatetraceError(f"--size must be WIDTHxHEIGHT in whole pixels, e.g. 800x800; got {text!r}") from None
+    return w, h
+
+
+def _progress_bar(label: str):
+    """A progress callback drawing ``label [####....] done/total`` on stderr, redrawn once per percent."""
+    shown = [-1]
+
+    def show(done: int, total: int) -> None:
+        percent = 100 * done // max(total, 1)
+        if percent == shown[0] and done < total:
+            return
+        shown[0] = percent
+        filled = 30 * done // max(total, 1)
+        end = "\n" if done >= total else ""
+        print(f"\r{label} [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}", end=end, file=sys.stderr,
+              flush=True)
+    return show
+
+
+def _animate(args) -> int:
+    from .animation import AnimationOptions, animate, save_still
+    from .playback import load_playback
+
+    t0 = time.perf_counter()
+    pb = load_playback(args.source)
+    options = AnimationOptions(fps=args.fps, duration=args.duration, size_px=_pixels(args.size))
+    out = Path(args.output)
+    if out.suffix.lower() == ".png":
+        save_still(pb, out, args.time, options)
+        print(f"wrote a still of {pb.name} at t = {args.time if args.time is not None else 0.6 * pb.duration:.4g} "
+              f"to {out} in {time.perf_counter() - t0:.1f} s")
+        return 0
+    res = animate(pb, out, options, progress=_progress_bar("rendering frames"))
+    print(f"wrote {res.path}: {res.frames} frames, {res.width}x{res.height} px, {res.fps:g} fps "
+          f"({res.frames / res.fps:.1f} s of video for {pb.duration:.4g} {'s' if pb.unit == 'm' else 'time units'} "
+          f"of skating) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _view(args) -> int:
+    from .playback import load_playback
+    from .viewer import write_viewer
+
+    t0 = time.perf_counter()
+    pb = load_playback(args.source)
+    src = Path(args.source)
+    target = Path(args.output) if args.output else (src.parent if src.suffix == ".json" else src) / "viewer.html"
+    path = write_viewer(pb, target)
+    print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB, self-contained: open it in any browser) "
+          f"in {time.perf_counter() - t0:.1f} s")
+    return 0
 
 
 def _reproduce(args) -> int:
@@ -288,6 +363,10 @@ def main(argv: list[str] | None = None) -> int:
             return _fit(args)
         if args.command == "reproduce":
             return _reproduce(args)
+        if args.command == "animate":
+            return _animate(args)
+        if args.command == "view":
+            return _view(args)
         return _trace(args)
     except (SkatetraceError, ValueError, TypeError) as exc:
         print(f"skatetrace: error: {exc}", file=sys.stderr)
