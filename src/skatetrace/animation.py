@@ -19,8 +19,6 @@ rendered once and each frame draws only the moving artists over them, so a frame
 from __future__ import annotations
 
 import math
-import os
-import secrets
 import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -36,6 +34,7 @@ from matplotlib.figure import Figure
 from PIL import Image
 
 from .errors import SkatetraceError
+from .io import write_atomically
 from .playback import Playback
 
 __all__ = ["AnimationOptions", "AnimationResult", "animate", "render_frame", "render_rgb", "save_still",
@@ -505,18 +504,6 @@ def _target(path) -> tuple[Path, str]:
     return path, suffix
 
 
-def _atomic_write(path: Path, write: Callable[[Path], None]) -> None:
-    """Write through a temporary file next to ``path`` and rename it; never leave a partial file."""
-    # a fresh name, keeping the suffix (the writers choose the format by it)
-    tmp = path.with_name(f".{path.stem}.{secrets.token_hex(6)}.partial{path.suffix.lower()}")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
 def animate(playback: Playback, path, options: AnimationOptions = AnimationOptions(),
             progress: Callable[[int, int], None] | None = None) -> AnimationResult:
     """Write an animation of a traced figure to a GIF or MP4 file.
@@ -573,7 +560,7 @@ def animate(playback: Playback, path, options: AnimationOptions = AnimationOptio
             with matplotlib.rc_context({"animation.ffmpeg_path": exe}):
                 run(writer, tmp)
 
-    _atomic_write(path, write)
+    write_atomically(path, write)
     return AnimationResult(path=path, frames=frames, width=width, height=height, fps=fps,
                            seconds_elapsed=_time.perf_counter() - start)
 
@@ -601,5 +588,5 @@ def save_still(playback: Playback, path, time: float | None = None,
     if not path.parent.is_dir():
         raise SkatetraceError(f"cannot write {path}: folder {path.parent} does not exist")
     rgb = render_rgb(playback, time, options)
-    _atomic_write(path, lambda tmp: Image.fromarray(rgb).save(tmp, format="PNG"))
+    write_atomically(path, lambda tmp: Image.fromarray(rgb).save(tmp, format="PNG"))
     return path

@@ -14,7 +14,7 @@ import math
 import os
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -22,27 +22,38 @@ from .controls import ControlSchedule
 from .tracing import FigureTrace
 from .verify import VerificationReport
 
-__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "atomic_write", "result_dict", "write_results", "load_result",
+__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "atomic_write", "write_atomically", "result_dict", "write_results", "load_result",
            "read_controls"]
 
 SCHEMA_VERSION = "skatetrace.result/1"
 CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2")
 
 
-def atomic_write(path: str | Path, data: str | bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and an atomic rename."""
+def write_atomically(path: str | Path, write: Callable[[Path], None]) -> None:
+    """Have ``write(tmp)`` write a temporary file next to ``path``, then rename it onto ``path``.
+
+    The temporary name keeps ``path``'s suffix (writers that choose a format by it still can). On
+    any failure, an interrupt included, the temporary file is removed and ``path`` is untouched.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    mode = "wb" if isinstance(data, bytes) else "w"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix.lower()}", dir=path.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8", "newline": ""})) as fh:
-            fh.write(data)
+        write(Path(tmp))
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def atomic_write(path: str | Path, data: str | bytes) -> None:
+    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file and an atomic rename."""
+    if isinstance(data, bytes):
+        write_atomically(path, lambda tmp: tmp.write_bytes(data))
+    else:
+        write_atomically(path, lambda tmp: tmp.write_text(data, encoding="utf-8", newline=""))
 
 
 def _clean(obj: Any) -> Any:

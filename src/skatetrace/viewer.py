@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from .io import atomic_write
 from .playback import Playback, load_playback
 
 __all__ = ["viewer_html", "write_viewer", "sample_rows", "default_speed", "SPEED_FACTORS"]
@@ -423,6 +424,5 @@ def write_viewer(playback: Playback | str | Path, path: str | Path, *, max_sampl
     if path.is_dir():
         path = path / "viewer.html"
     text = viewer_html(playback, max_samples=max_samples)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8", errors="replace", newline="\n")  # a lone surrogate becomes "?"
+    atomic_write(path, text.encode("utf-8", errors="replace"))  # a lone surrogate becomes "?"
     return path
