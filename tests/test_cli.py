@@ -149,3 +149,20 @@ def test_trace_writes_the_viewer_and_view_rewrites_it(tmp_path, capsys):
     assert main(["trace", "s-bend", "--out", str(skip), "--no-plots", "--no-viewer"]) == 0
     assert not (skip / "viewer.html").exists()
     assert main(["view", str(tmp_path / "nothing")]) == 2
+
+
+def test_double_flower_gif_and_mp4_at_the_defaults(tmp_path, capsys):
+    # issue 5's acceptance: both videos of the double flower from the CLI, full length and size
+    import imageio_ffmpeg
+    from PIL import Image
+
+    out = tmp_path / "flower"
+    assert main(["trace", "double-flower", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    gif, mp4 = tmp_path / "flower.gif", tmp_path / "flower.mp4"
+    assert main(["animate", str(out / "result.json"), "-o", str(gif)]) == 0
+    assert main(["animate", str(out), "-o", str(mp4)]) == 0
+    with Image.open(gif) as im:
+        assert (im.n_frames, im.size) == (750, (800, 800))  # 30 s at 25 fps: the figure lasts 109 units
+    frames, seconds = imageio_ffmpeg.count_frames_and_secs(str(mp4))
+    assert frames == 750 and abs(seconds - 30.0) < 0.1
+    assert tuple(next(imageio_ffmpeg.read_frames(str(mp4)))["size"]) == (800, 800)
