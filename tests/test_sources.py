@@ -179,3 +179,15 @@ def test_cli_traces_a_drawing_in_exact_mode(tmp_path, capsys):
     assert "spiral" in types
     result = json.loads((out / "result.json").read_text())
     assert any(p.get("curvature_coefficients") for s in result["sections"] for p in s["pieces"])
+
+
+def test_cli_fit_shows_both_modes(tmp_path, capsys):
+    out = tmp_path / "fit"
+    code = main(["fit", str(EXAMPLES / "serpentine.svg"), "--size", "6m", "--tol", "1mm", "--exact", "2um",
+                 "--out", str(out), "--no-plots"])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    data = json.loads((out / "fit.json").read_text())
+    assert data["hausdorff_certified"] <= 1e-3 and data["exact"]["deviation"] <= data["exact"]["tol"] == 2e-6
+    assert "arc mode: certified Hausdorff distance" in text and "exact mode:" in text
+    assert any(p["type"] == "spiral" for c in data["figure"]["curves"] for p in c["pieces"])
