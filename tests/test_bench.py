@@ -1,6 +1,7 @@
 """The benchmark scripts run on a small case (timings are never asserted)."""
 
 import importlib.util
+import math
 from pathlib import Path
 
 BENCH = Path(__file__).resolve().parents[1] / "bench"
@@ -27,3 +28,100 @@ def test_bench_school_small(capsys):
     assert rows[0]["figure"] == "circle-eight" and rows[0]["success"]
     assert rows[0]["deviation"] <= rows[0]["tolerance"]
     assert "circle-eight" in capsys.readouterr().out
+
+
+# ---- issue 6: the benchmark suite (bench/run_all.py and its scenarios), on tiny cases ----------
+
+
+def test_distinct_arcs_generator():
+    common = _load("_common")
+    a, b = common.distinct_arcs(5), common.distinct_arcs(40)
+    assert a == common.distinct_arcs(5)  # reproducible
+    assert a.curves[0].pieces == b.curves[0].pieces[:5] and a.curves[0].joins == b.curves[0].joins[:4]  # nested
+    curve = b.curves[0]
+    assert all(j.is_cusp for j in curve.joins) and len(curve.sections()) == 40
+    assert len({(p.curvature, p.length) for p in curve.pieces}) == 40
+    for p in curve.pieces:
+        assert 0.2 <= abs(p.curvature) <= 2.0 and 30.0 - 1e-9 <= abs(math.degrees(p.turn)) <= 200.0 + 1e-9
+    assert (b.params.M, b.params.m, b.params.I) == (2.0, 1.0, 3.0)
+
+
+def test_bench_double_flower_small(capsys):
+    out = _load("bench_double_flower").main(["1", "--cold", "1", "--figure", "line"])
+    assert out["figure"] == "line" and out["runs"] == 1
+    assert out["trace_success"] and out["verify_success"] and out["max_deviation"] <= out["tolerance"]
+    assert set(out["median"]) == {"trace", "sample", "verify", "replay", "checks", "total"}
+    assert math.isclose(sum(out["share"][k] for k in ("trace", "sample", "verify")), 1.0)
+    med = out["median"]  # verify splits into the replay and the checks
+    assert 0 < med["replay"] <= med["verify"] and math.isclose(med["replay"] + med["checks"], med["verify"])
+    cold = out["cold"]
+    assert cold["success"] and cold["returncodes"] == [0] and cold["wall_median"] > 0
+    assert {"result.json", "controls.csv", "report.json"} <= set(cold["files"])
+    assert "cold CLI start" in capsys.readouterr().out
+
+
+def test_bench_long_figure_small(capsys):
+    r = _load("bench_long_figure").main(["--pieces", "3"])
+    assert r["pieces"] == r["sections"] == r["distinct_sections"] == r["traced"] == 3 and not r["failed"]
+    assert r["trace_success"] and r["max_residual"] <= 1e-10
+    assert r["verify_success"] and not r["verify_failed"] and r["max_deviation"] <= r["tolerance"]
+    assert r["total_s"] >= r["trace_s"] > 0 and math.isclose(r["replay_s"] + r["checks_s"], r["verify_s"])
+    assert "3 distinct arcs" in capsys.readouterr().out
+
+
+def test_bench_scaling_small(tmp_path, capsys):
+    mod = _load("bench_scaling")
+    svg = tmp_path / "arc-line.svg"  # a semicircle and a line meeting at a corner: two quick sections
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 A 50 50 0 0 1 100 0 L 100 -60"/></svg>')
+    out = mod.main(["--sizes", "1", "2", "--tols", "1e-2", "1e-3", "--trace-tols", "1e-2", "--fit-runs", "1",
+                    "--drawing", str(svg)])
+    rows = out["pieces"]["rows"]
+    assert [r["pieces"] for r in rows] == [1, 2]
+    assert all(not r["skipped"] and not r["failed"] and r["verify_success"] for r in rows)
+    for k in ("trace", "sample", "verify", "replay", "checks", "total"):
+        assert math.isfinite(out["pieces"][f"slope_{k}"]["all"])
+    tol = out["tolerance"]["rows"]
+    assert [r["tol_rel"] for r in tol] == [1e-2, 1e-3]
+    assert all(r["fit_success"] and r["bound_over_tol"] <= 1.0 for r in tol)
+    assert tol[0]["arcs"] + tol[0]["lines"] <= tol[1]["arcs"] + tol[1]["lines"]
+    assert tol[0]["traced"] and tol[0]["trace_success"] and not tol[1]["traced"]
+    assert (tol[0]["arcs"], tol[0]["lines"], tol[0]["sections"]) == (1, 1, 2)
+    # the cap: a size whose extrapolated time exceeds the budget is skipped, with the reason
+    capped = mod.main(["--sizes", "1", "1000", "--budget", "1e-9", "--tols", "--quiet"])
+    skipped = capped["pieces"]["rows"][1]
+    assert skipped["pieces"] == 1000 and skipped["skipped"] and "budget" in skipped["note"]
+    assert "tolerance" not in capped
+    # --quick keeps sizes <= 100
+    assert [r["pieces"] for r in mod.main(["--quick", "--sizes", "1", "1000", "--tols", "--quiet"])["pieces"]["rows"]] == [1]
+
+
+def test_run_all_smoke(tmp_path, capsys):
+    results = BENCH / "RESULTS.md"
+    before = results.stat().st_mtime_ns if results.exists() else None
+    out = _load("run_all").main(["--smoke", "--out", str(tmp_path / "RESULTS.md")])
+    assert (results.stat().st_mtime_ns if results.exists() else None) == before  # bench/RESULTS.md untouched
+    text = (tmp_path / "RESULTS.md").read_text()
+    for heading in ("## Machine", "## Versions", "## Targets (issue 6)", "## 1. The paper's three arcs",
+                    "## 2. line end to end", "## 3. A long figure: 3 distinct arcs", "## 4. Scaling",
+                    "## Profile and what would close the gap", "Smoke mode", "Load average"):
+        assert heading in text
+    for pkg in ("numpy", "scipy", "numba", "matplotlib", "skatetrace"):
+        assert f"| {pkg} |" in text
+    keys = {t["key"] for t in out["targets"]}
+    assert {"flower_warm", "flower_cold", "paper_arc_1", "paper_arc_2", "paper_arc_3", "long_trace", "long_total",
+            "linear_trace", "linear_total"} <= keys
+    assert all(t["met"] in (True, False, None) for t in out["targets"])
+    res = out["results"]
+    assert all(r["exact_success"] and r["exact_residual"] <= 1e-10 for r in res["paper_arcs"])
+    assert res["long_figure"]["traced"] == 3 and res["long_figure"]["verify_success"]
+    assert res["double_flower"]["cold"]["success"]
+    # every table row has as many cells as its header (a '|' inside a cell would break it)
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        if line.startswith("|---"):
+            n = lines[i - 1].replace("\\|", "").count("|")
+            j = i + 1
+            while j < len(lines) and lines[j].startswith("|"):
+                assert lines[j].replace("\\|", "").count("|") == n, lines[j]
+                j += 1
+    assert "wrote" in capsys.readouterr().out
