@@ -216,16 +216,15 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     return best
 
 
-def _nearer(d: np.ndarray, pts: np.ndarray, placed) -> np.ndarray:
+def _nearer(d: np.ndarray, pts: np.ndarray, placed, xy: np.ndarray) -> np.ndarray:
     """``d`` lowered to the distance from ``pts`` to a placed piece where that is nearer.
 
-    A spiral's distance takes Newton iterations, so it is computed only for the points that its
-    bounding disc does not already rule out.
+    ``xy`` are 65 points along the piece. A spiral's distance takes Newton iterations, so it is
+    computed only for the points that its bounding disc does not already rule out.
     """
     seg = placed.segment
     if seg.constant:
         return np.minimum(d, distance_to_segment(pts, placed.start, seg))
-    xy = segment_points(placed.start, seg, 65)
     centre = xy.mean(axis=1)
     # chords of the 65-point sample lie within L^2 max|k| / (8 * 64^2) of the curve
     radius = float(np.max(np.hypot(xy[0] - centre[0], xy[1] - centre[1])))
@@ -262,11 +261,11 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             continue
         pts = rep.state[3:5, m]
         # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
-        on_curve = np.hstack([segment_points(p.start, p.segment, 65) for p in sec.section.pieces])
-        d_to = cKDTree(on_curve.T).query(pts.T)[0]
+        samples = [segment_points(p.start, p.segment, 65) for p in sec.section.pieces]
+        d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0]
         d_from = np.zeros(0)
-        for p in sec.section.pieces:
-            d_to = _nearer(d_to, pts, p)
+        for p, xy in zip(sec.section.pieces, samples):
+            d_to = _nearer(d_to, pts, p, xy)
             n = max(64, int(p.segment.length * 200))
             # Each piece's points are matched with the stretch of replay labelled with that piece
             # (one sample more each side): where two pieces pass close to each other, as at the
