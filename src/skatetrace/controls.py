@@ -13,7 +13,6 @@ from bisect import bisect_right
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline
 
 __all__ = ["ControlSchedule", "sample_adaptively"]
 
@@ -50,18 +49,43 @@ class ControlSchedule:
 
     def interpolant(self, i0: int, i1: int):
         """Callable ``f(t) -> (a, b, adot, bdot)`` on chunk ``[i0, i1)`` (arrays in, arrays out)."""
-        t = self.t[i0:i1]
-        sa = CubicHermiteSpline(t, self.a[i0:i1], self.adot[i0:i1])
-        sb = CubicHermiteSpline(t, self.b[i0:i1], self.bdot[i0:i1])
-        da, db = sa.derivative(), sb.derivative()
-        return lambda tt: (sa(tt), sb(tt), da(tt), db(tt))
+        knots, ca, cb = self.hermite(i0, i1)
+        last = knots.size - 2
+
+        def f(tt):
+            tt = np.asarray(tt, dtype=float)
+            k = np.clip(np.searchsorted(knots, tt, side="right") - 1, 0, last)
+            h = tt - knots[k]
+            a3, a2, a1, a0 = ca[k].T
+            b3, b2, b1, b0 = cb[k].T
+            return (((a3 * h + a2) * h + a1) * h + a0, ((b3 * h + b2) * h + b1) * h + b0,
+                    (3 * a3 * h + 2 * a2) * h + a1, (3 * b3 * h + 2 * b2) * h + b1)
+
+        return f
+
+    def hermite(self, i0: int, i1: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The cubics of chunk ``[i0, i1)``: ``(knots, ca, cb)``.
+
+        ``ca[k]`` holds ``(c3, c2, c1, c0)`` of ``a`` on ``[knots[k], knots[k + 1]]`` in powers of
+        ``t - knots[k]`` (``cb`` likewise for ``b``), computed as scipy's ``CubicHermiteSpline``
+        computes them.
+        """
+        t = np.ascontiguousarray(self.t[i0:i1])
+        dt = np.diff(t)
+        if t.size < 2 or not np.all(dt > 0):
+            raise ValueError(f"rows {i0}:{i1} are no chunk: a chunk has two or more strictly increasing times")
+
+        def cubic(y, dydx):
+            slope = np.diff(y) / dt
+            c3 = (dydx[:-1] + dydx[1:] - 2.0 * slope) / dt
+            return np.ascontiguousarray(np.stack([c3 / dt, (slope - dydx[:-1]) / dt - c3, dydx[:-1], y[:-1]], axis=1))
+
+        return t, cubic(self.a[i0:i1], self.adot[i0:i1]), cubic(self.b[i0:i1], self.bdot[i0:i1])
 
     def scalar_interpolant(self, i0: int, i1: int):
         """Fast scalar version of :meth:`interpolant` for use inside an ODE right-hand side."""
-        t = self.t[i0:i1]
-        ca = CubicHermiteSpline(t, self.a[i0:i1], self.adot[i0:i1]).c.T.tolist()
-        cb = CubicHermiteSpline(t, self.b[i0:i1], self.bdot[i0:i1]).c.T.tolist()
-        knots = t.tolist()
+        t, ca, cb = self.hermite(i0, i1)
+        ca, cb, knots = ca.tolist(), cb.tolist(), t.tolist()
         last = len(knots) - 2
 
         def f(tt: float):

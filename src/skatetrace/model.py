@@ -24,6 +24,7 @@ import numpy as np
 __all__ = [
     "SleighParams",
     "velocities",
+    "body_velocities",
     "momenta",
     "rhs",
     "skate_energy",
@@ -83,11 +84,6 @@ class SleighParams:
         return math.sqrt(self.I / (self.M + self.m))
 
 
-def _denominator(params: SleighParams, a, b):
-    M, m, I = params.M, params.m, params.I
-    return (M + m) * (I + m * a * a) + M * m * b * b
-
-
 def velocities(params: SleighParams, p1, p2, a, b, adot, bdot):
     """Body velocities from momenta and controls, eqs. (xi1_eq), (xi2_eq), (eta_eq).
 
@@ -97,8 +93,16 @@ def velocities(params: SleighParams, p1, p2, a, b, adot, bdot):
         Angular velocity of the blade, speed along the blade, lateral body-frame velocity of the
         mass (``eta = a xi1 + bdot``).
     """
-    M, m, I = params.M, params.m, params.I
-    D = _denominator(params, a, b)
+    return body_velocities(params.M, params.m, params.I, p1, p2, a, b, adot, bdot)
+
+
+def body_velocities(M, m, I, p1, p2, a, b, adot, bdot):
+    """:func:`velocities` with the parameters as plain numbers.
+
+    Pure arithmetic, so that the compiled replay (:mod:`skatetrace.replayer`) compiles this very
+    function rather than a copy of its formulas.
+    """
+    D = (M + m) * (I + m * a * a) + M * m * b * b
     q = p1 - m * a * bdot
     r = p2 + M * adot
     xi1 = ((M + m) * q + m * b * r) / D

@@ -20,11 +20,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numba import njit
 from scipy.spatial import cKDTree
 
 from .controls import ControlSchedule, sample_adaptively
 from .geometry import distance_to_segment, segment_points
 from .model import SleighParams, momenta, velocities
+from .replayer import replay_chunk
 from .simulate import simulate
 from .tracing import FigureTrace
 
@@ -87,8 +89,22 @@ class Replay:
 
 
 def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13, atol: float = 1e-14,
-           points_per_unit: float = 400.0) -> Replay:
-    """Integrate the full dynamics under ``schedule``, applying the figure's cusps."""
+           points_per_unit: float = 400.0, engine: str = "compiled") -> Replay:
+    """Integrate the full dynamics under ``schedule``, applying the figure's cusps.
+
+    Parameters
+    ----------
+    rtol, atol : float
+        DOP853's tolerances.
+    points_per_unit : float
+        Density of the returned samples per unit of time (at least 50 per chunk).
+    engine : {"compiled", "scipy"}
+        ``"compiled"`` (default) integrates with :func:`skatetrace.replayer.replay_chunk`;
+        ``"scipy"`` with :func:`skatetrace.simulate.simulate` (``solve_ivp``), about a hundred
+        times slower, as a cross-check of the first.
+    """
+    if engine not in ("compiled", "scipy"):
+        raise ValueError(f"engine must be 'compiled' or 'scipy', got {engine!r}")
     params = trace.params
     ts, states, ctrls, secs, pieces = [], [], [], [], []
     y = None
@@ -113,17 +129,22 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
             y = np.array([p1, p2, theta, x0, y0])
             prev_section = si
 
-        traj = simulate(params, y, schedule.scalar_interpolant(i0, i1), (t0, t1), rtol=rtol, atol=atol)
         n = max(50, int(math.ceil((t1 - t0) * points_per_unit)))
         tt = np.linspace(t0, t1, n)
-        ys = traj(tt)  # NaN where a failed integration did not reach: verify reports it
+        # NaN where a failed integration did not reach: verify reports it
+        if engine == "compiled":
+            run = replay_chunk(params, y, schedule, i0, i1, tt, rtol=rtol, atol=atol)
+            ys, y_end = run.states, run.y_end
+        else:
+            traj = simulate(params, y, schedule.scalar_interpolant(i0, i1), (t0, t1), rtol=rtol, atol=atol)
+            ys, y_end = traj(tt), traj.state[:, -1]
         ts.append(tt)
         states.append(ys)
         ctrls.append(np.vstack(f(tt)))
         secs.append(np.full(n, si))
         idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
         pieces.append(schedule.piece[i0:i1][idx])
-        y = traj.state[:, -1]
+        y = y_end
     return Replay(t=np.concatenate(ts), state=np.hstack(states), controls=np.hstack(ctrls),
                   section=np.concatenate(secs), piece=np.concatenate(pieces))
 
@@ -158,12 +179,54 @@ class VerificationReport:
         }
 
 
+@njit(cache=True)
+def _hermite_distance(qx, qy, x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, u):
+    """Distance from ``(qx, qy)`` to the cubic Hermite curve of one interval at ``u`` in [0, 1]."""
+    h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
+    px = h00 * x0 + h10 * h * vx0 + h01 * x1 + h11 * h * vx1
+    py = h00 * y0 + h10 * h * vy0 + h01 * y1 + h11 * h * vy1
+    return math.hypot(px - qx, py - qy)
+
+
+@njit(cache=True)
+def _golden_distances(qx, qy, t, x, y, vx, vy, cand, best):
+    """Lower ``best[i]`` to the least distance from point i to the interval ``cand[i]``.
+
+    The interval ``(j, j + 1)`` of the samples is interpolated by the cubic Hermite curve of the
+    positions and velocities; its distance is minimised by golden-section search (60 iterations:
+    the bracket shrinks below 1e-12 of the interval). Intervals out of range or of zero length are
+    skipped.
+    """
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    last = t.size - 2
+    for i in range(qx.size):
+        j = cand[i]
+        if j < 0 or j > last or not t[j + 1] - t[j] > 0.0:
+            continue
+        k = j + 1
+        h = t[k] - t[j]
+        args = (qx[i], qy[i], x[j], y[j], vx[j], vy[j], x[k], y[k], vx[k], vy[k], h)
+        lo, hi = 0.0, 1.0
+        c, d = hi - g * (hi - lo), lo + g * (hi - lo)
+        fc, fd = _hermite_distance(*args, c), _hermite_distance(*args, d)
+        for _ in range(60):
+            if fc < fd:
+                hi, d, fd = d, c, fc
+                c = hi - g * (hi - lo)
+                fc = _hermite_distance(*args, c)
+            else:
+                lo, c, fc = c, d, fd
+                d = lo + g * (hi - lo)
+                fd = _hermite_distance(*args, d)
+        best[i] = min(best[i], _hermite_distance(*args, 0.5 * (lo + hi)))
+
+
 def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params: SleighParams) -> np.ndarray:
     """Distance from target points (2, k) to the replayed path.
 
     The nearest dense sample is found with a k-d tree; the distance is then minimised over the
     cubic Hermite interpolant of the positions (velocities from the model) on the two adjacent
-    sample intervals, by golden-section search, so the chord error of a polyline does not count.
+    sample intervals, by golden-section search (compiled), so the chord error of a polyline does not count.
     """
     # Chunks share their end instants: a repeated time carries the limits from the left and from the
     # right, and the blade's speed jumps there with the control rates (the momenta are continuous).
@@ -193,26 +256,7 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     n1 = next_start[idx]
     n2 = next_start[np.minimum(n1 + 1, proper.size)]
     for cand in (p2, p1, n1, n2):
-        ok = (cand >= 0) & (cand < proper.size)
-        j = np.clip(cand, 0, proper.size - 1)
-        k = j + 1
-        h = t[k] - t[j]
-        valid = ok & (h > 0)
-        h = np.where(valid, h, 1.0)
-
-        def pos(u):  # u in [0, 1] along interval j..k
-            h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-            px = h00 * x[j] + h10 * h * vx[j] + h01 * x[k] + h11 * h * vx[k]
-            py = h00 * y[j] + h10 * h * vy[j] + h01 * y[k] + h11 * h * vy[k]
-            return np.hypot(px - points[0], py - points[1])
-
-        g = (math.sqrt(5) - 1) / 2
-        lo, hi = np.zeros_like(h), np.ones_like(h)
-        for _ in range(50):
-            c, d = hi - g * (hi - lo), lo + g * (hi - lo)
-            left = pos(c) < pos(d)
-            hi, lo = np.where(left, d, hi), np.where(left, lo, c)
-        best = np.where(valid, np.minimum(best, pos(0.5 * (lo + hi))), best)
+        _golden_distances(points[0], points[1], t, x, y, vx, vy, cand, best)
     return best
 
 

@@ -1,0 +1,129 @@
+"""The arithmetic of scipy's DOP853 that does not involve the right-hand side, compiled.
+
+Two compiled integrators use it: :mod:`skatetrace.integrator` (the sleigh held on a curve, for the
+manoeuvre solves) and :mod:`skatetrace.replayer` (the full five equations under sampled controls,
+for verification). Each keeps its own right-hand side and stage loop; what they share here is the
+Butcher tableau and everything scipy's :class:`scipy.integrate.DOP853` computes from the stages:
+the error norm, the step-size factor, the initial step, and the 7th-order dense output.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+__all__ = ["N_STAGES", "A", "B", "C", "A_EXTRA", "C_EXTRA", "POWER"]
+
+N_STAGES = _dop.N_STAGES  # 12
+A = np.ascontiguousarray(_dop.A[:N_STAGES, :N_STAGES])
+B = np.ascontiguousarray(_dop.B)
+C = np.ascontiguousarray(_dop.C[:N_STAGES])
+E3 = np.ascontiguousarray(_dop.E3)
+E5 = np.ascontiguousarray(_dop.E5)
+D = np.ascontiguousarray(_dop.D)
+A_EXTRA = np.ascontiguousarray(_dop.A[N_STAGES + 1:])
+C_EXTRA = np.ascontiguousarray(_dop.C[N_STAGES + 1:])
+POWER = _dop.INTERPOLATOR_POWER  # 7
+
+
+@njit(cache=True)
+def rms(x):
+    """Root mean square of a vector."""
+    return math.sqrt(np.sum(x * x) / x.size)
+
+
+@njit(cache=True)
+def error_norm(K, y, ynew, h_abs, rtol, atol):
+    """scipy's DOP853 error estimate of a step from the stages ``K`` (13 x n, the last ``f(ynew)``)."""
+    n = y.size
+    e5n = 0.0
+    e3n = 0.0
+    for i in range(n):
+        sc = atol + max(abs(y[i]), abs(ynew[i])) * rtol
+        e5 = 0.0
+        e3 = 0.0
+        for j in range(N_STAGES + 1):
+            e5 += E5[j] * K[j, i]
+            e3 += E3[j] * K[j, i]
+        e5n += (e5 / sc) ** 2
+        e3n += (e3 / sc) ** 2
+    if e5n == 0.0 and e3n == 0.0:
+        return 0.0
+    return h_abs * e5n / math.sqrt((e5n + 0.01 * e3n) * n)
+
+
+@njit(cache=True)
+def step_factor(err, rejected):
+    """Factor scipy applies to the step size after a step with error ``err``.
+
+    An accepted step (``err < 1``) may grow the step by up to 10, or not at all right after a
+    rejection; a rejected one shrinks it by at least 5 (by 5 on a NaN error).
+    """
+    if err < 1.0:
+        factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
+        return min(1.0, factor) if rejected else factor
+    if err != err:
+        return 0.2
+    return max(0.2, 0.9 * err ** (-1.0 / 8.0))
+
+
+@njit(cache=True)
+def initial_step_trial(y0, f0, interval, rtol, atol):
+    """First half of scipy's ``select_initial_step``: the trial step ``h0`` and ``(d1, scale)``.
+
+    The caller evaluates the right-hand side at ``y0 + h0 direction f0`` and finishes with
+    :func:`initial_step`.
+    """
+    scale = atol + np.abs(y0) * rtol
+    d0 = rms(y0 / scale)
+    d1 = rms(f0 / scale)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    return min(h0, interval), d1, scale
+
+
+@njit(cache=True)
+def initial_step(h0, d1, scale, f0, f1, interval):
+    """Second half of scipy's ``select_initial_step`` for an 8th-order method."""
+    d2 = rms((f1 - f0) / scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+    return min(100.0 * h0, h1, interval)
+
+
+@njit(cache=True)
+def dense_coefficients(Kx, h, y_old, y_new, f_new):
+    """The interpolant's coefficients F (7 x n) from all 16 stages ``Kx`` of a step."""
+    n = y_old.size
+    F = np.empty((POWER, n))
+    dy = y_new - y_old
+    F[0] = dy
+    F[1] = h * Kx[0] - dy
+    F[2] = 2.0 * dy - h * (f_new + Kx[0])
+    for i in range(4):
+        acc = np.zeros(n)
+        for j in range(16):
+            acc += D[i, j] * Kx[j]
+        F[3 + i] = h * acc
+    return F
+
+
+@njit(cache=True)
+def interpolate(t_old, h, y_old, F, t):
+    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``)."""
+    x = (t - t_old) / h
+    y = np.zeros(y_old.size)
+    for i in range(F.shape[0] - 1, -1, -1):
+        y += F[i]
+        if (F.shape[0] - 1 - i) % 2 == 0:
+            y *= x
+        else:
+            y *= 1.0 - x
+    return y + y_old
