@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicHermiteSpline
 
-from skatetrace.controls import sample_adaptively
+from skatetrace.controls import sample_adaptively, sample_intervals
 
 
 def _fn(t):
@@ -54,3 +54,23 @@ def test_sampling_terminates_at_a_kink_of_the_values():
     t = sample_adaptively(kinked, 0.0, 1.0, min_step=1e-7)
     assert t.size <= smooth.size + 2e-4 / 1e-7
     assert np.min(np.diff(t)) >= 1e-7
+
+
+def test_many_spans_at_once_sample_as_each_alone():
+    # spans of very different scales (each keeps its own relative tolerance) and a jump at every
+    # breakpoint: the span before it sees the left value, marked by `left`
+    bounds = np.array([0.0, 0.7, 2.0, 2.05, 6.0])
+    gain = np.array([1.0, 1e3, 1e-4, 2.0])
+
+    def fn(t, left):
+        after = np.searchsorted(bounds, t, side="right") - 1
+        before = np.searchsorted(bounds, t, side="left") - 1  # a span's end belongs to that span
+        k = np.clip(np.where(left, before, after), 0, bounds.size - 2)
+        a, b, ad, bd = _fn(t)
+        return gain[k] * a, gain[k] * b, gain[k] * ad, gain[k] * bd
+
+    spans = sample_intervals(fn, bounds)
+    assert len(spans) == 4
+    for k, (lo, hi) in enumerate(zip(bounds[:-1], bounds[1:])):
+        alone = sample_adaptively(lambda t, _k=k: tuple(gain[_k] * v for v in _fn(t)), lo, hi)
+        np.testing.assert_array_equal(spans[k], alone)

@@ -142,3 +142,18 @@ def test_bad_arguments_are_rejected():
         replay_chunk(SleighParams(), y0, s, 0, s.t.size, [0.0, 99.0])
     with pytest.raises(ValueError, match="non-decreasing"):
         replay_chunk(SleighParams(), y0, s, 0, s.t.size, [1.0, 0.5])
+
+
+def test_reused_sections_are_sampled_as_if_alone(flower):
+    # trace_figure solves each shape once; the reused sections share its phases and are sampled
+    # once. Copies with phases of their own are sampled afresh: the schedule must not change.
+    from dataclasses import replace
+
+    tr, schedule = flower
+    fresh = replace(tr, sections=tuple(replace(s, phases=tuple(list(s.phases))) for s in tr.sections))
+    again, states = verify_module.schedule_from_trace(fresh)
+    _, states0 = verify_module.schedule_from_trace(tr)
+    for k in ("t", "a", "b", "adot", "bdot", "section", "piece"):
+        np.testing.assert_array_equal(getattr(again, k), getattr(schedule, k))
+    for k in states:
+        np.testing.assert_array_equal(states[k], states0[k])

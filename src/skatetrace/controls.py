@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ControlSchedule", "sample_adaptively"]
+__all__ = ["ControlSchedule", "sample_adaptively", "sample_intervals"]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -108,41 +108,79 @@ def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-11, rat
     ``value_tol`` times the largest ``|a|, |b|``, and its derivative at its first quarter to
     ``rate_tol`` times the largest rate (relative tolerances, so that metres and model units sample alike). No
     interval is made shorter than ``min_step`` times the span. Only the midpoints of unfinished
-    intervals are evaluated, so the cost is linear in the result.
+    intervals are evaluated, so the cost is linear in the result. :func:`sample_intervals` does
+    the same on many spans at once.
     """
-    t = np.linspace(t0, t1, n0)
-    v = np.vstack(fn(t))  # (4, n): a, b, adot, bdot
-    v_scale = max(float(np.max(np.abs(v[:2]))), 1e-300)
-    r_scale = max(float(np.max(np.abs(v[2:]))), 1e-300)
-    todo = np.arange(t.size - 1)  # intervals [t[i], t[i + 1]] still to check
-    h_min = min_step * (t1 - t0)
-    while todo.size and t.size < max_points:
+    return sample_intervals(lambda t, left: fn(t), [t0, t1], value_tol=value_tol, rate_tol=rate_tol, n0=n0,
+                            max_points=max_points, min_step=min_step)[0]
+
+
+def sample_intervals(fn, bounds, *, value_tol: float = 1e-11, rate_tol: float = 1e-9, n0: int = 16,
+                     max_points: int = 200_000, min_step: float = 1e-7) -> list[np.ndarray]:
+    """:func:`sample_adaptively` on every span ``[bounds[k], bounds[k + 1]]``, all spans at once.
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(t, left) -> (a, b, adot, bdot)`` for an array of times ``t`` and a boolean array
+        ``left`` that marks the times standing for the end of their span: at a breakpoint, where
+        the rates jump, the span before it needs the limit from the left.
+    bounds : array_like
+        Increasing breakpoints.
+
+    Returns
+    -------
+    list of ndarray
+        The times of each span, its two ends included; the same as :func:`sample_adaptively` on
+        that span alone (tolerances relative to the span's own largest values), at a fraction of
+        the Python overhead when there are many spans.
+    """
+    bounds = np.asarray(bounds, dtype=float)
+    nspan = bounds.size - 1
+    t = np.concatenate([np.linspace(lo, hi, n0) for lo, hi in zip(bounds[:-1], bounds[1:])])
+    span = np.repeat(np.arange(nspan), n0)  # the span each time belongs to
+    end = np.zeros(t.size, dtype=bool)
+    end[n0 - 1::n0] = True
+    v = np.vstack(fn(t, end))  # (4, n): a, b, adot, bdot
+    v_scale = np.maximum(np.max(np.abs(v[:2]), axis=0).reshape(nspan, n0).max(axis=1), 1e-300)
+    r_scale = np.maximum(np.max(np.abs(v[2:]), axis=0).reshape(nspan, n0).max(axis=1), 1e-300)
+    todo = np.flatnonzero(~end)  # intervals [t[i], t[i + 1]] still to check
+    h_min = min_step * np.diff(bounds)
+    while todo.size:
+        # spans grown to max_points are left as they are
+        todo = todo[np.bincount(span, minlength=nspan)[span[todo]] < max_points]
+        if not todo.size:
+            break
+        k = span[todo]
         lo, hi = t[todo], t[todo + 1]
         h = hi - lo
         mid = 0.5 * (lo + hi)
-        vm = np.vstack(fn(mid))
-        vq = np.vstack(fn(lo + 0.25 * h))
-        v_scale = max(v_scale, float(np.max(np.abs(vm[:2]))))
-        r_scale = max(r_scale, float(np.max(np.abs(vm[2:]))))
+        inner = np.zeros(todo.size, dtype=bool)
+        vm = np.vstack(fn(mid, inner))
+        vq = np.vstack(fn(lo + 0.25 * h, inner))
+        np.maximum.at(v_scale, k, np.max(np.abs(vm[:2]), axis=0))
+        np.maximum.at(r_scale, k, np.max(np.abs(vm[2:]), axis=0))
         y0, y1, d0, d1 = v[:2, todo], v[:2, todo + 1], v[2:, todo], v[2:, todo + 1]
         # The Hermite cubic's value error peaks at the midpoint; its derivative error vanishes
         # there and peaks near u = 0.21 and 0.79, so the rates are checked at u = 1/4 (97% of it).
         value = 0.5 * (y0 + y1) + h * (d0 - d1) / 8.0
         rate = 1.125 * (y1 - y0) / h + 0.1875 * d0 - 0.3125 * d1
         # Below the rounding error of the difference quotient (y1 - y0) / h no halving can help.
-        floor = 16.0 * np.finfo(float).eps * v_scale / h
-        bad = np.any(np.abs(value - vm[:2]) > value_tol * v_scale, axis=0)
-        bad |= np.any(np.abs(rate - vq[2:]) > rate_tol * r_scale + floor, axis=0)
+        floor = 16.0 * np.finfo(float).eps * v_scale[k] / h
+        bad = np.any(np.abs(value - vm[:2]) > value_tol * v_scale[k], axis=0)
+        bad |= np.any(np.abs(rate - vq[2:]) > rate_tol * r_scale[k] + floor, axis=0)
         # Intervals are not halved below h_min: where the values come from a piecewise interpolant
         # (an ODE solver's dense output) their slope may jump between steps by more than the rate
         # tolerance, and no halving would ever satisfy it there.
-        bad &= h > 2.0 * h_min
+        bad &= h > 2.0 * h_min[k]
         if not np.any(bad):
             break
         # insert the midpoints of the bad intervals; each becomes two unfinished intervals
         pos = todo[bad] + 1
         t = np.insert(t, pos, mid[bad])
         v = np.insert(v, pos, vm[:, bad], axis=1)
+        span = np.insert(span, pos, k[bad])
+        end = np.insert(end, pos, False)
         first = pos + np.arange(pos.size) - 1  # index of the left half after insertion
         todo = np.sort(np.concatenate([first, first + 1]))
-    return t
+    return np.split(t, np.flatnonzero(end)[:-1] + 1)

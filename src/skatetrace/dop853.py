@@ -99,31 +99,39 @@ def initial_step(h0, d1, scale, f0, f1, interval):
 
 
 @njit(cache=True)
-def dense_coefficients(Kx, h, y_old, y_new, f_new):
-    """The interpolant's coefficients F (7 x n) from all 16 stages ``Kx`` of a step."""
-    n = y_old.size
-    F = np.empty((POWER, n))
-    dy = y_new - y_old
-    F[0] = dy
-    F[1] = h * Kx[0] - dy
-    F[2] = 2.0 * dy - h * (f_new + Kx[0])
-    for i in range(4):
-        acc = np.zeros(n)
-        for j in range(16):
-            acc += D[i, j] * Kx[j]
-        F[3 + i] = h * acc
-    return F
+def dense_coefficients(Kx, h, y_old, y_new, f_new, F):
+    """Write the interpolant's coefficients (7 x n) for a step with all 16 stages ``Kx`` into ``F``."""
+    for i in range(y_old.size):
+        dy = y_new[i] - y_old[i]
+        F[0, i] = dy
+        F[1, i] = h * Kx[0, i] - dy
+        F[2, i] = 2.0 * dy - h * (f_new[i] + Kx[0, i])
+        for r in range(4):
+            acc = 0.0
+            for j in range(16):
+                acc += D[r, j] * Kx[j, i]
+            F[3 + r, i] = h * acc
+
+
+@njit(cache=True)
+def interpolate_into(t_old, h, y_old, F, t, out, col):
+    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``) at ``t``, into ``out[:, col]``."""
+    x = (t - t_old) / h
+    npow = F.shape[0]
+    for i in range(y_old.size):
+        y = 0.0
+        for r in range(npow - 1, -1, -1):
+            y += F[r, i]
+            if (npow - 1 - r) % 2 == 0:
+                y *= x
+            else:
+                y *= 1.0 - x
+        out[i, col] = y + y_old[i]
 
 
 @njit(cache=True)
 def interpolate(t_old, h, y_old, F, t):
-    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``)."""
-    x = (t - t_old) / h
-    y = np.zeros(y_old.size)
-    for i in range(F.shape[0] - 1, -1, -1):
-        y += F[i]
-        if (F.shape[0] - 1 - i) % 2 == 0:
-            y *= x
-        else:
-            y *= 1.0 - x
-    return y + y_old
+    """DOP853's dense output on one step at ``t``, as a new array."""
+    out = np.empty((y_old.size, 1))
+    interpolate_into(t_old, h, y_old, F, t, out, 0)
+    return out[:, 0]

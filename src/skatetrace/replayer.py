@@ -44,9 +44,18 @@ _MESSAGES = {
 
 @njit(cache=True)
 def _controls(knots, ca, cb, t, ctl):
-    """``(a, b, adot, bdot)`` at ``t`` from the Hermite cubics (rows ``c3, c2, c1, c0`` per interval)."""
-    k = np.searchsorted(knots, t, side="right") - 1
-    k = min(max(k, 0), knots.size - 2)
+    """``(a, b, adot, bdot)`` at ``t`` from the Hermite cubics (rows ``c3, c2, c1, c0`` per interval).
+
+    They go to ``ctl[:4]``; ``ctl[4]`` holds the index of the interval last used.
+    """
+    # the interval of t: a short walk from the last one (the integration moves forwards)
+    k = int(ctl[4])
+    last = knots.size - 2
+    while k < last and t >= knots[k + 1]:
+        k += 1
+    while k > 0 and t < knots[k]:
+        k -= 1
+    ctl[4] = k
     h = t - knots[k]
     ctl[0] = ((ca[k, 0] * h + ca[k, 1]) * h + ca[k, 2]) * h + ca[k, 3]
     ctl[1] = ((cb[k, 0] * h + cb[k, 1]) * h + cb[k, 2]) * h + cb[k, 3]
@@ -78,7 +87,7 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
     t = knots[0]
     t_end = knots[-1]
     y = y0.copy()
-    ctl = np.empty(4)
+    ctl = np.zeros(5)
     j = 0
     while j < nout and t_out[j] <= t:
         out[:, j] = y
@@ -87,8 +96,8 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
     f_new = np.empty(n)
     ynew = np.empty(n)
     ytmp = np.empty(n)
-    kstage = np.empty(n)
     Kx = np.empty((16, n))
+    F = np.empty((rk.POWER, n))
     _rhs(M, m, I, knots, ca, cb, t, y, f, ctl)
     h0, d1, scale = rk.initial_step_trial(y, f, t_end - t, rtol, atol)
     _rhs(M, m, I, knots, ca, cb, t + h0, y + h0 * f, f_new, ctl)
@@ -113,8 +122,7 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
                     for q in range(s):
                         acc += rk.A[s, q] * Kx[q, i]
                     ytmp[i] = y[i] + acc * h
-                _rhs(M, m, I, knots, ca, cb, t + rk.C[s] * h, ytmp, kstage, ctl)
-                Kx[s] = kstage
+                _rhs(M, m, I, knots, ca, cb, t + rk.C[s] * h, ytmp, Kx[s], ctl)
             for i in range(n):
                 acc = 0.0
                 for q in range(rk.N_STAGES):
@@ -130,7 +138,7 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
             if err < 1.0:
                 break
             rejected = True
-        if not np.all(np.isfinite(ynew)):
+        if not math.isfinite(ynew[0] + ynew[1] + ynew[2] + ynew[3] + ynew[4]):
             return _NONFINITE, t, y, out, nfev, nsteps
         nsteps += 1
         if j < nout and t_out[j] <= t_new:
@@ -141,15 +149,14 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
                     for q in range(s):
                         acc += rk.A_EXTRA[s - rk.N_STAGES - 1, q] * Kx[q, i]
                     ytmp[i] = y[i] + acc * h
-                _rhs(M, m, I, knots, ca, cb, t + rk.C_EXTRA[s - rk.N_STAGES - 1] * h, ytmp, kstage, ctl)
-                Kx[s] = kstage
+                _rhs(M, m, I, knots, ca, cb, t + rk.C_EXTRA[s - rk.N_STAGES - 1] * h, ytmp, Kx[s], ctl)
             nfev += 3
-            F = rk.dense_coefficients(Kx, h, y, ynew, f_new)
+            rk.dense_coefficients(Kx, h, y, ynew, f_new, F)
             while j < nout and t_out[j] <= t_new:
                 if t_out[j] == t_new:
                     out[:, j] = ynew
                 else:
-                    out[:, j] = rk.interpolate(t, h, y, F, t_out[j])
+                    rk.interpolate_into(t, h, y, F, t_out[j], out, j)
                 j += 1
         t = t_new
         y[:] = ynew

@@ -247,21 +247,30 @@ class SectionTrace:
             out[k] *= V
         return self._finish(out, seg, geometry)
 
+    def layout(self, s, segment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The blade's ``(x, y, theta)`` at arc lengths ``s`` along the section on pieces ``segment``.
+
+        ``s`` and ``segment`` are as :meth:`evaluate` returns them; the piece is given, not
+        found from ``s``, since at a join ``s`` is known only to the integration's accuracy.
+        """
+        seg = np.asarray(segment)
+        pieces = self.section.pieces
+        ends = np.cumsum([p.segment.length for p in pieces])
+        s = np.clip(np.asarray(s, dtype=float), 0.0, ends[-1])
+        x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
+        starts = np.concatenate([[0.0], ends[:-1]])
+        for i, p in enumerate(pieces):
+            m = seg == i
+            if np.any(m):
+                local = np.clip(s[m] - starts[i], 0.0, p.segment.length)
+                xs, ys, hs = travel(p.start, p.segment, local)
+                x[m], y[m], heading[m] = xs, ys, hs
+        return x, y, heading + (math.pi if self.direction < 0 else 0.0)
+
     def _finish(self, out: dict[str, np.ndarray], seg: np.ndarray, geometry: bool = True) -> dict[str, np.ndarray]:
         d = self.direction
         if geometry:
-            pieces = self.section.pieces
-            ends = np.cumsum([p.segment.length for p in pieces])
-            s = np.clip(out["s"], 0.0, ends[-1])
-            x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
-            starts = np.concatenate([[0.0], ends[:-1]])
-            for i, p in enumerate(pieces):
-                m = seg == i
-                if np.any(m):
-                    local = np.clip(s[m] - starts[i], 0.0, p.segment.length)
-                    xs, ys, hs = travel(p.start, p.segment, local)
-                    x[m], y[m], heading[m] = xs, ys, hs
-            out.update(theta=heading + (math.pi if d < 0 else 0.0), x=x, y=y)
+            out["x"], out["y"], out["theta"] = self.layout(out["s"], seg)
         if d < 0:
             for k in ("a", "b", "adot", "bdot", "p2"):
                 out[k] = -out[k]

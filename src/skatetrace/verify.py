@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from .controls import ControlSchedule, sample_adaptively
+from .controls import ControlSchedule, sample_intervals
 from .geometry import distance_to_segment, segment_points
 from .model import SleighParams, momenta, velocities
 from .replayer import replay_chunk
@@ -31,6 +31,30 @@ from .simulate import simulate
 from .tracing import FigureTrace
 
 __all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
+
+
+def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Sample times of one traced section and its controls and momenta there (no layout).
+
+    Both one-sided limits are sampled at every breakpoint: an interval's last row is the limit
+    from the left, the next interval's first row the limit from the right.
+    """
+    def fn(tt, left):
+        v = sec.evaluate(tt, geometry=False)
+        if np.any(left):
+            vl = sec.evaluate(tt[left], side="left", geometry=False)
+            for k in v:
+                v[k][left] = vl[k]
+        return v["a"], v["b"], v["adot"], v["bdot"]
+
+    spans = sample_intervals(fn, sec.breakpoints())
+    ts = np.concatenate(spans)
+    last = np.cumsum([sp.size for sp in spans]) - 1
+    v = sec.evaluate(ts, geometry=False)
+    vl = sec.evaluate(ts[last], side="left", geometry=False)
+    for k in v:
+        v[k][last] = vl[k]
+    return ts, v
 
 
 def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
@@ -41,32 +65,23 @@ def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, 
     """
     cols: dict[str, list] = {k: [] for k in ("t", "a", "b", "adot", "bdot", "section", "piece",
                                               "x", "y", "theta", "p1", "p2", "xi1", "xi2")}
+    # Sections traced once and reused by trace_figure (the same shape elsewhere in the figure)
+    # share their phases, hence their controls: they are sampled once and only laid out anew.
+    sampled: dict[tuple[int, int], tuple[np.ndarray, dict[str, np.ndarray]]] = {}
     for si, (sec, t_start) in enumerate(zip(trace.sections, trace.start_times)):
         if not sec.phases:
             continue
-        bps = sec.breakpoints()
-        for lo, hi in zip(bps[:-1], bps[1:]):
-            # Both one-sided limits are sampled at every breakpoint: the interval's last row is the
-            # limit from the left, the next interval's first row the limit from the right.
-            def fn(tt, _hi=hi):
-                left = tt >= _hi
-                v = sec.evaluate(tt, geometry=False)
-                if np.any(left):
-                    vl = sec.evaluate(tt[left], side="left", geometry=False)
-                    for k in v:
-                        v[k][left] = vl[k]
-                return v["a"], v["b"], v["adot"], v["bdot"]
-
-            ts = sample_adaptively(fn, lo, hi)
-            v = sec.evaluate(ts)
-            vl = sec.evaluate(ts[-1:], side="left")
-            for k in v:
-                v[k][-1] = vl[k][0]
-            for k in ("a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2"):
-                cols[k].append(v[k])
-            cols["t"].append(t_start + ts)
-            cols["section"].append(np.full(ts.size, si))
-            cols["piece"].append(np.array([sec.section.pieces[i].index for i in v["segment"]]))
+        key = (id(sec.phases), sec.direction)
+        if key not in sampled:
+            sampled[key] = _sample_section(sec)
+        ts, v = sampled[key]
+        x, y, theta = sec.layout(v["s"], v["segment"])
+        v = dict(v, x=x, y=y, theta=theta)
+        for k in ("a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2"):
+            cols[k].append(v[k])
+        cols["t"].append(t_start + ts)
+        cols["section"].append(np.full(ts.size, si))
+        cols["piece"].append(np.array([p.index for p in sec.section.pieces])[v["segment"]])
     arr = {k: np.concatenate(v) if v else np.empty(0) for k, v in cols.items()}
     schedule = ControlSchedule(t=arr["t"], a=arr["a"], b=arr["b"], adot=arr["adot"], bdot=arr["bdot"],
                                section=arr["section"].astype(int), piece=arr["piece"].astype(int))
@@ -86,6 +101,11 @@ class Replay:
 
     def velocities(self, params: SleighParams):
         return velocities(params, self.state[0], self.state[1], *self.controls)
+
+    def take(self, idx) -> "Replay":
+        """The rows ``idx`` (in that order) as a replay of their own."""
+        return Replay(t=self.t[idx], state=self.state[:, idx], controls=self.controls[:, idx],
+                      section=self.section[idx], piece=self.piece[idx])
 
 
 def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13, atol: float = 1e-14,
@@ -205,6 +225,12 @@ def _golden_distances(qx, qy, t, x, y, vx, vy, cand, best):
             continue
         k = j + 1
         h = t[k] - t[j]
+        # The curve stays within |x_k - x_j| + 4/27 h (|v_j| + |v_k|) of x_j (the Hermite basis
+        # functions of the velocities peak at 4/27): skip the interval if that cannot beat best.
+        reach = math.hypot(x[k] - x[j], y[k] - y[j]) + 4.0 / 27.0 * h * (
+            math.hypot(vx[j], vy[j]) + math.hypot(vx[k], vy[k]))
+        if math.hypot(qx[i] - x[j], qy[i] - y[j]) - reach > best[i]:
+            continue
         args = (qx[i], qy[i], x[j], y[j], vx[j], vy[j], x[k], y[k], vx[k], vy[k], h)
         lo, hi = 0.0, 1.0
         c, d = hi - g * (hi - lo), lo + g * (hi - lo)
@@ -298,12 +324,17 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     xi1, xi2, _ = rep.velocities(params)
     sections, drifts, cusp_speeds = [], [], []
     dev_to, dev_from = 0.0, 0.0
+    # each section's rows, found once (not with a mask over the whole replay per section)
+    order = np.argsort(rep.section, kind="stable")
+    cuts = np.searchsorted(rep.section[order], np.arange(len(trace.sections) + 1))
     for si, sec in enumerate(trace.sections):
-        m = rep.section == si
-        if not sec.phases or not np.any(m):
+        idx = order[cuts[si]:cuts[si + 1]]
+        if not sec.phases or not idx.size:
             sections.append({"section": si, "traced": False, "passed": False, "message": sec.message})
             continue
-        pts = rep.state[3:5, m]
+        sub = rep.take(idx)
+        sxi1, sxi2 = xi1[idx], xi2[idx]
+        pts = sub.state[3:5]
         # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
         samples = [segment_points(p.start, p.segment, 65) for p in sec.section.pieces]
         d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0]
@@ -314,22 +345,20 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             # Each piece's points are matched with the stretch of replay labelled with that piece
             # (one sample more each side): where two pieces pass close to each other, as at the
             # waist of a figure eight, the nearest sample may otherwise belong to the other one.
-            own = np.flatnonzero(m & (rep.piece == p.index))
+            own = np.flatnonzero(sub.piece == p.index)
+            mp = np.zeros(idx.size, dtype=bool)
             if own.size:
-                mp = np.zeros_like(m)
                 mp[max(own[0] - 1, 0):own[-1] + 2] = True
-                mp &= m
             else:
-                mp = m
-            d_from = np.concatenate([d_from, _figure_to_replay(segment_points(p.start, p.segment, n), rep, mp, params)])
-        idx = np.flatnonzero(m)
-        speeds = (abs(float(xi2[idx[0]])), abs(float(xi2[idx[-1]])))
+                mp[:] = True
+            d_from = np.concatenate([d_from, _figure_to_replay(segment_points(p.start, p.segment, n), sub, mp, params)])
+        speeds = (abs(float(sxi2[0])), abs(float(sxi2[-1])))
         cusp_speeds.extend(speeds)
         # "At rest" means below 1e-8 of the fastest motion in the section (the glide, the blade, or
         # the mass relative to the ice): the replay resolves speeds to a fraction of that scale.
-        a, b, ad, bd = rep.controls[:, m]
-        mass_speed = np.hypot(xi2[m] - xi1[m] * b + ad, xi1[m] * a + bd)
-        speed_scale = max(trace.options.speed, float(np.max(np.abs(xi2[m]))), float(np.max(mass_speed)))
+        a, b, ad, bd = sub.controls
+        mass_speed = np.hypot(sxi2 - sxi1 * b + ad, sxi1 * a + bd)
+        speed_scale = max(trace.options.speed, float(np.max(np.abs(sxi2))), float(np.max(mass_speed)))
         cusp_limit = 1e-8 * speed_scale
         if max(speeds) > cusp_limit:
             bad_cusps.append(f"section {si}: {max(speeds):.3g} > {cusp_limit:.3g}")
@@ -344,17 +373,17 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         })
         dev_to, dev_from = max(dev_to, float(d_to.max())), max(dev_from, float(d_from.max()))
         for p in sec.section.pieces:
-            mp = m & (rep.piece == p.index)
+            mp = sub.piece == p.index
             if np.count_nonzero(mp) < 2:
                 continue
             if not p.segment.constant:
                 continue  # a spiral: neither p1 + r p2 nor p2 is conserved
             k = p.segment.coefficients[0]
             if k != 0.0:
-                inv = rep.state[0, mp] + rep.state[1, mp] / k
+                inv = sub.state[0, mp] + sub.state[1, mp] / k
                 name = "p1 + r p2"
             else:
-                inv = rep.state[1, mp]
+                inv = sub.state[1, mp]
                 name = "p2"
             drifts.append({"piece": p.index, "invariant": name, "drift": float(np.ptp(inv)),
                            "scale": float(np.max(np.abs(inv)) + 1e-300)})
