@@ -1,35 +1,47 @@
 """skatetrace: how must a skater move their centre of mass so that the blade traces a figure?
 
-The public API, re-exported explicitly.
+The public API, re-exported explicitly. Names are imported from their modules on first use
+(PEP 562), so that ``import skatetrace`` (and the command line) does not pay for the readers of
+SVG files and the fitting code when a run needs neither. ``simulate`` and ``verify`` are functions
+named like their modules; they are bound at import so that the name always means the function.
 """
 
-from .curves import Drawing, Path
-from .deviation import DeviationCost, deviation_cost, segments_target
-from .exact import ExactDrawingFit, ExactPathFit, figure_from_exact, fit_exact_drawing, fit_exact_path
-from .errors import DrawingError, FigureFormatError, FitError, InfeasibleArcError, SkatetraceError
-from .figure import Curve, Figure, Join, figure_from_dict, load_figure
-from .fitting import DrawingFit, PathFit, figure_from_fit, fit_drawing, fit_path
-from .inputs import from_function, load_drawing, parse_length, read_points, read_svg
-from .geometry import Pose, Segment, Spiral
-from .model import SleighParams
-from .patterns import pattern, pattern_names
-from .presets import PAPER_PARAMS, skater_params
-from .rests import VerifiedTrace, add_rests, trace_and_verify
-from .school import school_figure, school_names
+from importlib import import_module
+
 from .simulate import Trajectory, simulate
-from .sources import Resolved, resolve
-from .tracing import FigureTrace, SectionTrace, TraceOptions, TraceStatus, trace_figure, trace_section
 from .verify import VerificationReport, schedule_from_trace, verify
 
-__all__ = [
-    "Curve", "DeviationCost", "Figure", "FigureFormatError", "FigureTrace", "InfeasibleArcError", "Join", "Pose",
-    "SectionTrace", "Segment", "SkatetraceError", "SleighParams", "TraceOptions", "TraceStatus",
-    "VerificationReport", "figure_from_dict", "load_figure", "pattern", "pattern_names",
-    "Drawing", "DrawingError", "DrawingFit", "FitError", "PAPER_PARAMS", "Path", "PathFit", "Resolved",
-    "figure_from_fit", "fit_drawing", "fit_path", "from_function", "load_drawing", "parse_length", "read_points",
-    "read_svg", "resolve", "school_figure", "school_names", "skater_params",
-    "Trajectory", "deviation_cost", "schedule_from_trace", "segments_target", "simulate", "trace_figure", "trace_section", "verify",
-    "VerifiedTrace", "add_rests", "trace_and_verify",
-    "Spiral", "ExactDrawingFit", "ExactPathFit", "figure_from_exact", "fit_exact_drawing", "fit_exact_path",
-]
+_EXPORTS = {
+    "curves": ("Drawing", "Path"),
+    "deviation": ("DeviationCost", "deviation_cost", "segments_target"),
+    "errors": ("DrawingError", "FigureFormatError", "FitError", "InfeasibleArcError", "SkatetraceError"),
+    "exact": ("ExactDrawingFit", "ExactPathFit", "figure_from_exact", "fit_exact_drawing", "fit_exact_path"),
+    "figure": ("Curve", "Figure", "Join", "figure_from_dict", "load_figure"),
+    "fitting": ("DrawingFit", "PathFit", "figure_from_fit", "fit_drawing", "fit_path"),
+    "geometry": ("Pose", "Segment", "Spiral"),
+    "inputs": ("from_function", "load_drawing", "parse_length", "read_points", "read_svg"),
+    "model": ("SleighParams",),
+    "patterns": ("pattern", "pattern_names"),
+    "presets": ("PAPER_PARAMS", "skater_params"),
+    "rests": ("VerifiedTrace", "add_rests", "trace_and_verify"),
+    "school": ("school_figure", "school_names"),
+    "sources": ("Resolved", "resolve"),
+    "tracing": ("FigureTrace", "SectionTrace", "TraceOptions", "TraceStatus", "trace_figure", "trace_section"),
+}
+_MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
+
+__all__ = sorted([*_MODULE_OF, "Trajectory", "simulate", "VerificationReport", "schedule_from_trace", "verify"])
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str):
+    module = _MODULE_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module 'skatetrace' has no attribute {name!r}")
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value  # the next lookup is an ordinary attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

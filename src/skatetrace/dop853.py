@@ -9,14 +9,37 @@ the error norm, the step-size factor, the initial step, and the 7th-order dense 
 
 from __future__ import annotations
 
+import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dop
 
 __all__ = ["N_STAGES", "A", "B", "C", "A_EXTRA", "C_EXTRA", "POWER"]
 
+
+
+def _scipy_coefficients():
+    """scipy's ``dop853_coefficients`` module (numbers only, it imports nothing but numpy).
+
+    It is read from its file, so that the package ``scipy.integrate`` (0.3-0.6 s to import, for
+    solve_ivp, quadrature and more) is not loaded by every run; if the file is not where scipy
+    keeps it, the module is imported the ordinary way.
+    """
+    spec = importlib.util.find_spec("scipy")
+    path = Path(spec.origin).parent / "integrate" / "_ivp" / "dop853_coefficients.py" if spec and spec.origin else None
+    if path is None or not path.is_file():
+        from scipy.integrate._ivp import dop853_coefficients
+
+        return dop853_coefficients
+    file_spec = importlib.util.spec_from_file_location("skatetrace._dop853_coefficients", path)
+    module = importlib.util.module_from_spec(file_spec)
+    file_spec.loader.exec_module(module)
+    return module
+
+
+_dop = _scipy_coefficients()
 N_STAGES = _dop.N_STAGES  # 12
 A = np.ascontiguousarray(_dop.A[:N_STAGES, :N_STAGES])
 B = np.ascontiguousarray(_dop.B)

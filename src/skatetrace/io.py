@@ -7,7 +7,6 @@ run never leaves a half-written result behind.
 from __future__ import annotations
 
 import csv
-import io as _io
 import json
 from dataclasses import asdict
 import math
@@ -122,14 +121,12 @@ def result_dict(trace: FigureTrace) -> dict[str, Any]:
 
 
 def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
-    buf = _io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(CSV_COLUMNS)
+    """``controls.csv``: floats as their shortest round-trip ``repr``, one column at a time."""
     cols = {"piece": schedule.piece, "t": schedule.t, "a": schedule.a, "b": schedule.b,
             "adot": schedule.adot, "bdot": schedule.bdot, **states}
-    for i in range(schedule.t.size):
-        w.writerow([int(cols["piece"][i])] + [repr(float(cols[k][i])) for k in CSV_COLUMNS[1:]])
-    return buf.getvalue()
+    text = [list(map(str, np.asarray(cols["piece"], dtype=int).tolist()))]
+    text += [list(map(repr, np.asarray(cols[k], dtype=float).tolist())) for k in CSV_COLUMNS[1:]]
+    return "\n".join([",".join(CSV_COLUMNS), *map(",".join, zip(*text))]) + "\n"
 
 
 def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,

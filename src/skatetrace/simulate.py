@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .controls import ControlSchedule
 from .model import SleighParams, velocities
@@ -122,6 +121,8 @@ def simulate(
         if not (np.all(np.isfinite(t_span)) and t_span[1] != t_span[0]):
             raise ValueError(f"t_span must be two different finite times, got {t_span!r}")
         chunks = [(float(t_span[0]), float(t_span[1]), controls)]
+    from scipy.integrate import solve_ivp  # here, not at import: scipy.integrate takes 0.3-0.6 s to load
+
     ts, ys, pieces, nfev = [], [], [], 0
     y = y0
     budget = [int(max_nfev)]

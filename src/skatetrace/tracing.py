@@ -282,20 +282,28 @@ class SectionTrace:
     def time_at_length(self, s):
         """Physical section time at which the blade has travelled ``s`` (scalar or 1-D array).
 
-        Bisection (the speed is positive inside a section), all lengths at once. A time within 1e-9
-        of a breakpoint (a join) is snapped onto it, so that evaluating there gives the state at
-        the start of the next piece.
+        A length reached at a breakpoint (a join, within 1e-12 of the section's length) gives that
+        breakpoint. Others are found by bisection (the speed is positive inside a section), all
+        at once, and a time within 1e-9 of a breakpoint is snapped onto it, so that evaluating
+        there gives the state at the start of the next piece.
         """
         target = np.asarray(s, dtype=float)
         flat = np.atleast_1d(target).ravel()
-        lo, hi = np.zeros(flat.size), np.full(flat.size, self.duration)
-        for _ in range(100):
-            mid = 0.5 * (lo + hi)
-            below = self.evaluate(mid, geometry=False)["s"] < flat
-            lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
         bps = self.breakpoints()
-        near = bps[np.argmin(np.abs(bps[:, None] - hi[None, :]), axis=0)]
-        out = np.where(np.abs(near - hi) <= 1e-9 * max(1.0, self.duration), near, hi)
+        # Lengths reached at a breakpoint (every join is one) need no search: the blade passes
+        # them there, to the integration's accuracy.
+        s_bp = self.evaluate(bps, geometry=False)["s"]
+        k = np.argmin(np.abs(s_bp[:, None] - flat[None, :]), axis=0)
+        out = np.where(np.abs(s_bp[k] - flat) <= 1e-12 * max(1.0, self.length), bps[k], np.nan)
+        todo = np.flatnonzero(np.isnan(out))
+        if todo.size:
+            lo, hi = np.zeros(todo.size), np.full(todo.size, self.duration)
+            for _ in range(100):
+                mid = 0.5 * (lo + hi)
+                below = self.evaluate(mid, geometry=False)["s"] < flat[todo]
+                lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+            near = bps[np.argmin(np.abs(bps[:, None] - hi[None, :]), axis=0)]
+            out[todo] = np.where(np.abs(near - hi) <= 1e-9 * max(1.0, self.duration), near, hi)
         return float(out[0]) if target.ndim == 0 else out.reshape(target.shape)
 
     def to_dict(self) -> dict[str, Any]:
