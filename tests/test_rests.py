@@ -86,17 +86,20 @@ def test_bad_policy_is_refused():
 def test_a_launch_back_through_a_whole_circle_fails_and_a_rest_at_the_waist_fixes_it():
     # A figure eight of two 1.5 m circles for a real skater (SI units), the second circle longer by
     # 1e-9 so that the glide lies on it: the launch then runs back through the whole first circle,
-    # and the open-loop replay strays by 1e-5 m (tolerance 6e-6) and ends at 3e-7 m/s. With a
-    # rest at the waist both circles are launched and stopped within themselves.
+    # and the open-loop replay amplifies the last digits of the sampled controls: it strays by
+    # 1.7e-6 m (1e-5 m with the earlier bisection sampler). At a tolerance of 1e-7 x size (6e-7 m)
+    # that fails; with a rest at the waist both circles are launched and stopped within themselves
+    # and the replay stays within 4e-8 m.
     R = 1.5
     segs = (Segment(1 / R, 2 * math.pi * R), Segment(-1 / R, 2 * math.pi * R * (1 + 1e-9)))
     fig = Figure("eight", (Curve(segs, (SMOOTH,)),), skater_params())
     opts = TraceOptions(speed=2.0, placement="first")  # the default picks a placement that needs no rest
-    never = trace_and_verify(fig, options=opts, rests="never")
+    never = trace_and_verify(fig, options=opts, rests="never", rel_tol=1e-7)
     assert never.trace.success and not never.report.success
-    auto = trace_and_verify(fig, options=opts, rests="auto")
+    auto = trace_and_verify(fig, options=opts, rests="auto", rel_tol=1e-7)
     assert auto.success and auto.rests == ((0, 1),) and auto.rounds == 2
-    assert auto.report.max_deviation < 1e-2 * auto.report.tolerance  # 6e-9 m measured
+    assert auto.report.max_deviation < 0.2 * auto.report.tolerance
+    assert auto.report.max_deviation < 0.05 * never.report.max_deviation
     assert auto.report.max_cusp_speed < 1e-8 * opts.speed
     # "at rest" is judged against the fastest motion in each section: here the mass, relative to
     # the ice, moving several times faster than the 2 m/s glide
@@ -104,7 +107,7 @@ def test_a_launch_back_through_a_whole_circle_fails_and_a_rest_at_the_waist_fixe
         mass_peak = math.sqrt(2.0 * sec.metrics["peak_mass_kinetic_energy"] / sec.params.m)
         assert checks["speed_scale"] >= 0.99 * mass_peak > 2.0 * opts.speed
         assert checks["cusp_speed_limit"] == pytest.approx(1e-8 * checks["speed_scale"])
-    joins = trace_and_verify(fig, options=opts, rests="joins")
+    joins = trace_and_verify(fig, options=opts, rests="joins", rel_tol=1e-7)
     assert joins.rests == ((0, 1),) and joins.rounds == 1 and joins.success
     np.testing.assert_allclose(joins.report.max_deviation, auto.report.max_deviation, rtol=1e-6)
 

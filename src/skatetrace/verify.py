@@ -33,6 +33,9 @@ from .tracing import FigureTrace
 __all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
 
 
+_SAMPLED = ("a", "b", "adot", "bdot", "p1", "p2", "s", "xi1", "xi2", "segment")
+
+
 def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Sample times of one traced section and its controls and momenta there (no layout).
 
@@ -45,16 +48,12 @@ def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
             vl = sec.evaluate(tt[left], side="left", geometry=False)
             for k in v:
                 v[k][left] = vl[k]
-        return v["a"], v["b"], v["adot"], v["bdot"]
+        return np.vstack([v[k] for k in _SAMPLED])
 
-    spans = sample_intervals(fn, sec.breakpoints())
-    ts = np.concatenate(spans)
-    last = np.cumsum([sp.size for sp in spans]) - 1
-    v = sec.evaluate(ts, geometry=False)
-    vl = sec.evaluate(ts[last], side="left", geometry=False)
-    for k in v:
-        v[k][last] = vl[k]
-    return ts, v
+    spans, rows = sample_intervals(fn, sec.breakpoints(), values=True)
+    v = dict(zip(_SAMPLED, rows))
+    v["segment"] = v["segment"].astype(int)
+    return np.concatenate(spans), v
 
 
 def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
