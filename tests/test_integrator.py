@@ -295,3 +295,38 @@ def test_polynomial_leg_singular_event_uses_the_curvature_at_the_current_s():
 def test_bad_kappas_shape_raises(kappas, switches):
     with pytest.raises(ValueError, match="kappas|switches|leg"):
         integrate_legs(P, _glide(0.5), kappas, switches, 0.05, 1.0, rtol=RTOL, atol=ATOL)
+
+
+# ---- issue 6: the lean entry point and the compiled dense evaluation -----------------------------
+
+
+@pytest.mark.parametrize("t_end,stop", [(30.0, True), (-30.0, True), (1.5, False)])
+def test_final_state_is_where_integrate_legs_ends(t_end, stop):
+    from skatetrace.integrator import final_state
+
+    y0 = _glide(1 / 1.2)
+    coef = np.array([[1 / 1.2, 0.0, 0.0, 0.0], [-0.5, 0.1, 0.0, 0.0]])
+    switches = np.array([0.6, math.inf])
+    ref = integrate_legs(P, y0, coef, switches, 2.0, t_end, rtol=RTOL, atol=ATOL, stop_event=stop,
+                         singular_limit=1e-3)
+    hit, t, y = final_state(P, y0, coef, switches, 2.0, t_end, rtol=RTOL, atol=ATOL, stop_event=stop,
+                            singular_limit=1e-3)
+    assert ref.status == 0 and hit == (ref.hit or "reached")
+    assert t == ref.t and np.array_equal(y, ref.y)  # the same compiled run, bit for bit
+
+
+def test_dense_evaluation_is_scipys_formula_bit_for_bit():
+    res = integrate_legs(P, _glide(1.0), [1.0], [math.inf], 0.7, -3.0, rtol=RTOL, atol=ATOL, dense=True)
+    sol = res.legs[0]
+    t = np.linspace(-3.1, 0.1, 1001)  # past both ends too: extrapolated from the nearest step
+    # scipy's Dop853DenseOutput, vectorised over the points
+    i = np.clip(np.searchsorted(sol._ends, t, side="right") - 1, 0, sol._ends.size - 1)
+    x = ((t - sol.t_old[i]) / sol.h[i])[:, None]
+    F = sol.F[i]
+    ref = np.zeros((t.size, 5))
+    for j in range(F.shape[1] - 1, -1, -1):
+        ref += F[:, j]
+        ref *= x if (F.shape[1] - 1 - j) % 2 == 0 else (1.0 - x)
+    ref += sol.y_old[i]
+    assert np.array_equal(sol(t), ref.T)
+    assert np.array_equal(sol(t[17]), ref[17])

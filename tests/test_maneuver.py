@@ -70,3 +70,80 @@ def test_polish_rejects_a_duration_of_the_wrong_sign(monkeypatch):
     monkeypatch.setattr(maneuver, "root", lambda *a, **k: SimpleNamespace(x=np.array([1.0, 0.5])))
     sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12)
     assert sol == pytest.approx((0.3, 1.0)) and res == {"end_speed": 0.0, "length": 0.0}
+
+
+# ---- issue 6: the faster solve finds the same manoeuvres ---------------------------------------
+
+
+def _full_scan_brackets(params, legs, glide_ab, backward=False):
+    """The first bracket of each sign on the whole grid, every point integrated (the scan before issue 6)."""
+    from skatetrace import maneuver
+
+    length = sum(ell for _, ell in legs)
+    spec, acc = [], 0.0
+    for i, (k, ell) in enumerate(legs):
+        acc += ell
+        spec.append((maneuver._coefficients(k), acc if i + 1 < len(legs) else math.inf))
+    p = maneuver.glide_state(params, spec[0][0][0], *glide_ab, 1.0)
+    y0 = np.array([p[0], p[1], glide_ab[0], glide_ab[1], 0.0])
+    sign = -1.0 if backward else 1.0
+    out = {}
+    for direction in (1.0, -1.0):
+        grid = direction / length**2 * maneuver._GRID
+        ends = []
+        for a in grid:
+            _legs, status, _t, y, hit = maneuver._integrate(params, y0, spec, a, sign * 60.0 * length, rtol=1e-9,
+                                                            atol=1e-11, stop=True, singular_limit=1e-3, dense=False)
+            ends.append(abs(y[4]) if status == 0 and hit == "stopped" else None)
+        for k in range(grid.size - 1):
+            if ends[k] is not None and ends[k + 1] is not None and (ends[k] - length) * (ends[k + 1] - length) <= 0:
+                out[direction] = sorted((grid[k], grid[k + 1]))
+                break
+    return out
+
+
+@pytest.mark.parametrize("legs,glide_ab,backward", [
+    ([(1.0, 1.0)], (0.0, 0.0), False),  # the paper's third arc
+    ([(1.0, 0.5 * math.pi)], (10.42477796076938, 0.0), False),  # its apex on the blade's axis
+    ([(1.25, 0.25)], (2.507964473723101, 0.0), True),  # the paper's second arc: a launch
+    ([(0.0, 1.0)], (3.0, 0.0), False),  # a line
+    ([((0.2, 0.3, 0.0, 0.0), 1.0)], (0.0, 1.0), False),  # a clothoid
+])
+def test_stop_is_the_first_root_of_the_full_scan_polished_to_rounding(legs, glide_ab, backward):
+    p = SleighParams()
+    sol = solve_stop(p, legs, glide_ab, 1.0, backward=backward)
+    assert sol.success, sol.message
+    brackets = _full_scan_brackets(p, legs, glide_ab, backward)
+    alpha = sol.params[0]
+    assert any(lo <= alpha <= hi for lo, hi in brackets.values()), (alpha, brackets)
+    length = sum(ell for _, ell in legs)
+    assert abs(sol.residuals["length"]) <= 8 * np.finfo(float).eps * length
+    assert abs(sol.residuals["end_speed"]) <= 1e-13
+    assert sol.nfev <= 40  # a coarse scan, Brent's method at moderate accuracy, two or three polishing runs
+
+
+def test_mirrored_stop_is_the_launch_bit_for_bit():
+    from skatetrace.maneuver import mirrored_maneuver
+
+    p = SleighParams()
+    for legs, (a, b) in [([(1.0, 1.0)], (0.0, 0.3)), ([(1.25, 0.25)], (2.507964473723101, 0.0)),
+                         ([(0.0, 1.0), ((0.0, 0.5, 0.0, 0.0), 2.0)], (0.0, 0.5))]:
+        launch = solve_stop(p, legs, (a, b), 1.0, backward=True)
+        mirror = mirrored_maneuver(solve_stop(p, legs, (-a, b), 1.0), legs)
+        assert launch.success and mirror.success and mirror.kind == "launch"
+        assert mirror.params == launch.params and mirror.duration == launch.duration
+        assert mirror.residuals == launch.residuals
+        assert mirror.min_singular_distance == launch.min_singular_distance
+        for ml, ll in zip(mirror.legs, launch.legs, strict=True):
+            assert (ml.coefficients, ml.t0, ml.t1, ml.s0) == (ll.coefficients, ll.t0, ll.t1, ll.s0)
+            t = np.linspace(ll.t0, ll.t1, 101)
+            assert np.array_equal(ml.sol(t), ll.sol(t))
+
+
+def test_same_legs_compares_curvature_polynomials_and_lengths():
+    from skatetrace.maneuver import same_legs
+
+    assert same_legs([(1.0, 2.0)], [((1.0, -0.0, 0.0, -0.0), 2.0)])
+    assert not same_legs([(1.0, 2.0)], [(1.0, 2.5)])
+    assert not same_legs([(1.0, 2.0)], [((1.0, 0.1), 2.0)])
+    assert not same_legs([(1.0, 2.0)], [(1.0, 1.0), (0.5, 1.0)])

@@ -250,3 +250,38 @@ def test_spiral_sections_are_cached_by_shape_not_confused_with_arcs():
     tr = trace_figure(Figure("ab", (a, b)), P)
     assert tr.success, tr.message
     assert tr.sections[0].phases != tr.sections[1].phases
+
+
+# --------------------------------------------------------------------------------------------------
+# issue 6: the shortcuts of the placement search change no choice
+# --------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("seg", [Segment(1.25, 0.5026548245743669), Segment(1.0, math.pi)])
+def test_pruned_search_and_mirrored_launches_choose_as_the_full_search(seg, monkeypatch):
+    # the paper's second arc (three placements trace it, the last cannot beat the second) and
+    # third (one glide at a = 0, whose launch is its stop reversed; the apexes on the axis lie
+    # farther out than that glide's whole reach)
+    from skatetrace import tracing
+
+    sec = _single(seg).curves[0].sections()[0]
+    fast = tracing.trace_section(P, sec)
+    monkeypatch.setattr(tracing, "_cannot_win", lambda *a: False)
+    monkeypatch.setattr(tracing, "same_legs", lambda *a: False)
+    full = tracing.trace_section(P, sec)
+    assert fast.success and full.success
+    assert fast.glide == full.glide and fast.metrics == full.metrics and fast.residuals == full.residuals
+    for a, b in zip(fast.phases, full.phases, strict=True):
+        assert (a.kind, a.t0, a.t1) == (b.kind, b.t0, b.t1)
+    assert fast.nfev < full.nfev
+
+
+def test_placement_keys_within_rounding_are_a_tie_kept_by_the_first():
+    from skatetrace.tracing import _improves
+
+    assert _improves((0.9, 5.0), (1.0, 1.0))
+    assert not _improves((1.1, 0.5), (1.0, 1.0))
+    assert _improves((1.0 + 1e-14, 2.0), (1.0, 3.0))  # same reach: less energy wins
+    assert not _improves((1.0 - 1e-14, 3.0 - 1e-13), (1.0, 3.0))  # a tie
+    # the inflection spiral is symmetric under b -> -b about its middle: the apexes at b = +-2.5 are
+    # mirror images and the first tried is kept, whatever the rounding of their solves
+    fig = Figure("i", (Curve((Spiral((0.6, -0.5, 0.0, 0.0), 2.4),), name="i"),))
+    assert trace_figure(fig, P).sections[0].glide["b"] == 2.5

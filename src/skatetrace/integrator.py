@@ -1,9 +1,9 @@
 """A compiled DOP853 integrator for the sleigh held on a curve (the manoeuvre solves).
 
-Newton's method integrates a manoeuvre many times per section (a bracketing scan, then every
-residual and Jacobian column), so the integration dominates the time of a trace. This module is
-scipy's DOP853 (:class:`scipy.integrate.DOP853`) step for step (the same coefficients, error norm,
-step-size control, initial step, event rule and 7th-order dense output), specialised to the
+A manoeuvre solve integrates many times (a bracketing scan, then the root's refinement), so the
+integration dominates the time of a trace. This module is scipy's DOP853
+(:class:`scipy.integrate.DOP853`) step for step (the same coefficients, error norm, step-size
+control, initial step, event rule and 7th-order dense output), specialised to the
 constrained system of :mod:`skatetrace.maneuver` and compiled with numba. A test compares it with
 ``solve_ivp(method="DOP853")`` on the same problem.
 
@@ -111,12 +111,14 @@ def _rhs_leg(M, m, I, coef, s0, alpha, t, y, out):
 
 
 @njit(cache=True)
-def _speed(M, m, I, coef, s0, alpha, t, y):
-    """Speed along the blade ``xi2`` (the ``"stopped"`` event); NaN at the singular point."""
-    out = np.empty(5)
-    if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, out):
+def _speed(M, m, I, coef, s0, alpha, t, y, work):
+    """Speed along the blade ``xi2`` (the ``"stopped"`` event); NaN at the singular point.
+
+    ``work`` is a scratch array of 5 (the event is evaluated in tight loops: no allocation).
+    """
+    if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, work):
         return np.nan
-    return out[4]
+    return work[4]
 
 
 @njit(cache=True)
@@ -125,27 +127,36 @@ def _rms(x):
 
 
 @njit(cache=True)
-def _interpolate(t_old, h, y_old, F, t):
-    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``)."""
+def _interpolate(t_old, h, y_old, F, t, out):
+    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``), written into ``out``.
+
+    Scalar loops into a buffer (the event bisection calls this some fifty times per event): for
+    each component the same operations in the same order as scipy's array form, so the same bits.
+    """
     x = (t - t_old) / h
-    y = np.zeros(y_old.size)
-    for i in range(F.shape[0] - 1, -1, -1):
-        y += F[i]
-        if (F.shape[0] - 1 - i) % 2 == 0:
-            y *= x
-        else:
-            y *= 1.0 - x
-    return y + y_old
+    npow = F.shape[0]
+    n = y_old.size
+    for k in range(n):
+        out[k] = 0.0
+    # the components side by side (independent chains of operations, each in scipy's order)
+    for i in range(npow - 1, -1, -1):
+        w = x if (npow - 1 - i) % 2 == 0 else 1.0 - x
+        for k in range(n):
+            out[k] = (out[k] + F[i, k]) * w
+    for k in range(n):
+        out[k] += y_old[k]
+    return out
 
 
 @njit(cache=True)
-def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g):
+def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g, work):
     """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit.
 
     The singular point ``(0, -kappa I / M)`` moves with the curvature at ``y``'s ``|s|``.
+    ``work`` is a scratch array of 5.
     """
     g[0] = abs(y[4]) - switch
-    g[1] = _speed(M, m, I, coef, s0, alpha, t, y) if stop_event else 1.0
+    g[1] = _speed(M, m, I, coef, s0, alpha, t, y, work) if stop_event else 1.0
     if sing_limit > 0.0:
         sing_b = -_curvature(coef, s0, y[4]) * I / M
         g[2] = math.hypot(y[2], y[3] - sing_b) - sing_limit
@@ -154,28 +165,35 @@ def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit
 
 
 @njit(cache=True)
-def _dense_coefficients(M, m, I, coef, s0, alpha, t_old, h, y_old, y_new, f_new, K):
-    """The interpolant's coefficients F (7 x n) for the step just taken (3 extra stages)."""
+def _dense_coefficients(M, m, I, coef, s0, alpha, t_old, h, y_old, y_new, f_new, K, Kx, ytmp, F):
+    """The interpolant's coefficients ``F`` (7 x n) for the step just taken (3 extra stages).
+
+    ``Kx`` (16 x n) and ``ytmp`` (n) are scratch arrays and ``F`` is written in place. Scalar
+    loops, no temporaries (this runs on every step of a dense integration): the same operations
+    in the same order as the array form of scipy's ``_dense_output_impl``.
+    """
     n = y_old.size
-    Kx = np.empty((16, n))
-    Kx[:_NS + 1] = K
-    tmp = np.empty(n)
+    for s in range(_NS + 1):
+        for i in range(n):
+            Kx[s, i] = K[s, i]
     for s in range(_NS + 1, 16):
-        dy = np.zeros(n)
-        for j in range(s):
-            dy += _A_EXTRA[s - _NS - 1, j] * Kx[j]
-        _rhs_leg(M, m, I, coef, s0, alpha, t_old + _C_EXTRA[s - _NS - 1] * h, y_old + dy * h, tmp)
-        Kx[s] = tmp
-    F = np.empty((_POWER, n))
-    dy = y_new - y_old
-    F[0] = dy
-    F[1] = h * Kx[0] - dy
-    F[2] = 2.0 * dy - h * (f_new + Kx[0])
-    for i in range(4):
-        acc = np.zeros(n)
-        for j in range(16):
-            acc += _D[i, j] * Kx[j]
-        F[3 + i] = h * acc
+        row = s - _NS - 1
+        for i in range(n):
+            dy = 0.0
+            for j in range(s):
+                dy += _A_EXTRA[row, j] * Kx[j, i]
+            ytmp[i] = y_old[i] + dy * h
+        _rhs_leg(M, m, I, coef, s0, alpha, t_old + _C_EXTRA[row] * h, ytmp, Kx[s])
+    for i in range(n):
+        dy = y_new[i] - y_old[i]
+        F[0, i] = dy
+        F[1, i] = h * Kx[0, i] - dy
+        F[2, i] = 2.0 * dy - h * (f_new[i] + Kx[0, i])
+        for r in range(4):
+            acc = 0.0
+            for j in range(16):
+                acc += _D[r, j] * Kx[j, i]
+            F[3 + r, i] = h * acc
     return F
 
 
@@ -241,6 +259,11 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
     f_new = np.empty(n)
     g_old = np.empty(3)
     g_new = np.empty(3)
+    g = np.empty(3)
+    work = np.empty(n)  # scratch of the event functions
+    yint = np.empty(n)  # the dense output at a bisection point
+    Kx = np.empty((16, n))  # scratch of the dense output's extra stages
+    F_step = np.zeros((_POWER, n))  # the dense output of the current step, when it has one
     F_none = np.zeros((_POWER, n))  # stands for "no dense output" on steps that need none
     h_abs = 0.0
     for leg in range(nlegs):
@@ -250,7 +273,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
         if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, f):
             return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
         nfev += 1
-        _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g_old)
+        _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g_old, work)
         # Where the curvature is continuous across the join (a chain of spirals) the right-hand side
         # is too, and the step size the last leg proposed carries over; where it jumps the control
         # rates jump, and the step is chosen afresh as scipy would for a new solve_ivp call.
@@ -334,22 +357,25 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                     else:
                         h_abs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
                     rejected = True
-            if not np.all(np.isfinite(ynew)):
+            finite = True
+            for i in range(n):
+                if not math.isfinite(ynew[i]):
+                    finite = False
+            if not finite:
                 return _NONFINITE, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
             # events: a sign change (or touch of zero) between the step's ends, as in solve_ivp
-            _event_values(M, m, I, coef, s0, alpha, t_new, ynew, switch, stop_event, sing_limit, g_new)
+            _event_values(M, m, I, coef, s0, alpha, t_new, ynew, switch, stop_event, sing_limit, g_new, work)
             active = False
             for e in range(3):
                 if (g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0):
                     active = True
             F = F_none
             if dense or active:
-                F = _dense_coefficients(M, m, I, coef, s0, alpha, t, h, y, ynew, f_new, K)
+                F = _dense_coefficients(M, m, I, coef, s0, alpha, t, h, y, ynew, f_new, K, Kx, ytmp, F_step)
                 nfev += 3
             hit = -1
             t_hit = t_new
             if active:
-                g = np.empty(3)
                 for e in range(3):
                     if not ((g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0)):
                         continue
@@ -360,8 +386,8 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                         mid = 0.5 * (lo + hi)
                         if mid == lo or mid == hi:
                             break
-                        _event_values(M, m, I, coef, s0, alpha, mid, _interpolate(t, h, y, F, mid), switch,
-                                      stop_event, sing_limit, g)
+                        _event_values(M, m, I, coef, s0, alpha, mid, _interpolate(t, h, y, F, mid, yint), switch,
+                                      stop_event, sing_limit, g, work)
                         if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
                             lo, glo = mid, g[e]
                         else:
@@ -383,7 +409,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                 step_leg[nsteps] = leg
                 nsteps += 1
             if hit >= 0:
-                yh = _interpolate(t, h, y, F, t_hit)
+                yh = _interpolate(t, h, y, F, t_hit, np.empty(n))
                 if hit == 0 and leg + 1 < nlegs:
                     t, y = t_hit, yh
                     leg_bounds[leg + 1] = t
@@ -398,6 +424,28 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
             for e in range(3):
                 g_old[e] = g_new[e]
     return _REACHED, nlegs - 1, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+
+
+@njit(cache=True)
+def _evaluate_steps(t_old, h, y_old, F, steps, t):
+    """The dense output at times ``t``, each on its step ``steps[k]``: shape ``(t.size, n)``.
+
+    :func:`_interpolate` point by point (the same operations as scipy's vectorised form), written
+    out with plain indices: this samples thousands of points per section.
+    """
+    n = y_old.shape[1]
+    npow = F.shape[1]
+    out = np.zeros((t.size, n))
+    for p in range(t.size):
+        i = steps[p]
+        x = (t[p] - t_old[i]) / h[i]
+        for j in range(npow - 1, -1, -1):
+            w = x if (npow - 1 - j) % 2 == 0 else 1.0 - x
+            for k in range(n):
+                out[p, k] = (out[p, k] + F[i, j, k]) * w
+        for k in range(n):
+            out[p, k] += y_old[i, k]
+    return out
 
 
 class DenseSolution:
@@ -425,13 +473,7 @@ class DenseSolution:
         scalar = t.ndim == 0
         tt = np.atleast_1d(t)
         i = np.clip(np.searchsorted(self._ends, tt, side="right") - 1, 0, self._ends.size - 1)
-        x = ((tt - self.t_old[i]) / self.h[i])[:, None]
-        F = self.F[i]  # (k, 7, 5)
-        y = np.zeros((tt.size, self.y_old.shape[1]))
-        for j in range(F.shape[1] - 1, -1, -1):
-            y += F[:, j]
-            y *= x if (F.shape[1] - 1 - j) % 2 == 0 else (1.0 - x)
-        y += self.y_old[i]
+        y = _evaluate_steps(self.t_old, self.h, self.y_old, self.F, i, tt)
         return y[0] if scalar else y.T
 
 
@@ -540,3 +582,20 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
     code = 0 if status >= 0 else int(status)
     return IntegrationResult(status=code, hit=hit, message=_MESSAGES[int(status)], t=float(t), y=np.asarray(yf),
                              leg_bounds=bounds, legs=legs)
+
+
+def final_state(params: SleighParams, y0: np.ndarray, coef: np.ndarray, switches: np.ndarray, alpha: float,
+                t_end: float, *, rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
+                max_nfev: int = 150_000) -> tuple[str | None, float, np.ndarray]:
+    """Where :func:`integrate_legs` ends, without its checks and bookkeeping (no dense output).
+
+    For the many short integrations of a manoeuvre solve. ``coef`` must be a float array of shape
+    ``(n, 4)`` and ``switches`` one of shape ``(n,)``, as :func:`integrate_legs` makes them.
+    Returns ``(outcome, t, y)``: ``outcome`` is ``"stopped"`` or ``"singular"`` for a terminal
+    event, ``"reached"`` for the end of the interval (or of the last leg) and ``None`` for a failure.
+    """
+    out = _run(params.M, params.m, params.I, y0, coef, switches, float(alpha), float(t_end), float(rtol),
+               float(atol), bool(stop_event), float(singular_limit), int(max_nfev), False)
+    status = int(out[0])
+    outcome = {_REACHED: "reached", _STOPPED: "stopped", _SINGULAR: "singular"}.get(status)
+    return outcome, float(out[2]), np.asarray(out[3])

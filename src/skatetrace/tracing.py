@@ -30,7 +30,7 @@ import numpy as np
 
 from .figure import Figure, Section
 from .geometry import shifted_polynomial, travel
-from .maneuver import ManeuverSolution, constrained_rates, glide_state, solve_stop
+from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
 from .model import SleighParams, mass_energy, velocities
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
@@ -439,14 +439,14 @@ def trace_section(
             if extra >= options.search:
                 break
             extra += 1
+            if _cannot_win(glide_ab, best[0]):
+                continue  # counted as tried: the same placements are searched as without the shortcut
         # an instant apex is no glide: the launch and the stop share the whole segment
         ell_g = ell if steady else 0.5 * Lg
         before, after = _legs_from_apex(segs, g, ell_g)
         glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
                  "kappa": kg, "speed": options.speed}
-        with np.errstate(divide="ignore", invalid="ignore"):
-            stop = solve_stop(params, after, glide_ab, 1.0, **kw)
-            launch = solve_stop(params, before, glide_ab, 1.0, backward=True, **kw) if stop.success else None
+        stop, launch = _maneuvers(params, before, after, glide_ab, kw)
         nfev += stop.nfev + (launch.nfev if launch else 0)
         attempts += 1
         attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
@@ -456,7 +456,7 @@ def trace_section(
             return attempt
         else:
             key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
-            if best is None or key < best[0]:
+            if best is None or _improves(key, best[0]):
                 best = (key, attempt)
     if best is not None:
         return replace(best[1], nfev=nfev)
@@ -467,6 +467,46 @@ def trace_section(
         curve_index=curve_index, section=section, params=params, speed=options.speed, glide=first_failure.glide,
         residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=nfev,
     )  # no phases: controls that failed a check are not handed on to be written or replayed
+
+
+# Placement keys this close (relative) are a tie, kept by the first placement: mirror-image
+# placements (a section symmetric under b -> -b, or two equal segments) have the same key but for
+# the rounding of their solves.
+_KEY_TIE = 1e-12
+
+
+def _improves(key: tuple[float, float], best: tuple[float, float]) -> bool:
+    """Whether placement ``key`` (reach, peak kinetic energy) beats ``best``: less reach, then less energy."""
+    for new, old in zip(key, best):
+        if abs(new - old) > _KEY_TIE * max(abs(old), abs(new)):
+            return new < old
+    return False
+
+
+def _cannot_win(glide_ab: tuple[float, float], best_key: tuple[float, float]) -> bool:
+    """Whether a placement with its apex at ``glide_ab`` is sure to reach farther than the best so far.
+
+    The apex is a sampled state of every trace through it (a phase boundary), so the reach of such
+    a trace is at least ``max(|a|, |b|)`` there. The margin covers the rounding of section times
+    when the apex is evaluated; a placement within it is solved, never skipped.
+    """
+    return max(abs(glide_ab[0]), abs(glide_ab[1])) > best_key[0] * (1.0 + 1e-9)
+
+
+def _maneuvers(params: SleighParams, before, after, glide_ab, kw) -> tuple[ManeuverSolution, ManeuverSolution | None]:
+    """The stop from the apex ``glide_ab`` over ``after`` and, if it is found, the launch over ``before``.
+
+    With the mass at ``a = 0`` and the same curve on both sides of the apex the launch is the
+    stop reversed in time (:func:`~skatetrace.maneuver.mirrored_maneuver`), exactly: it is not
+    solved a second time.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        stop = solve_stop(params, after, glide_ab, 1.0, **kw)
+        if not stop.success:
+            return stop, None
+        if glide_ab[0] == 0.0 and same_legs(before, after):
+            return stop, mirrored_maneuver(stop, before)
+        return stop, solve_stop(params, before, glide_ab, 1.0, backward=True, **kw)
 
 
 def _reach(trace: SectionTrace) -> float:
@@ -513,7 +553,7 @@ def _assemble(params, section, options, curve_index, glide, before, stop, launch
 def _with_metrics(trace: SectionTrace, singular: float, options: TraceOptions) -> SectionTrace:
     t = np.linspace(0.0, trace.duration, 4001)
     t = np.unique(np.concatenate([t, trace.breakpoints()]))
-    v = trace.evaluate(t)
+    v = trace.evaluate(t, geometry=False)  # the metrics need no layout of the blade's path
     ke = mass_energy(trace.params, v["xi1"], v["xi2"], v["a"], v["b"], v["adot"], v["bdot"])
     metrics = {
         "duration": trace.duration,
