@@ -32,8 +32,8 @@ def test_functions_named_like_their_modules_stay_functions():
     assert skatetrace.verify is verify and skatetrace.simulate is simulate
 
 
-def test_import_does_not_load_the_drawing_readers_or_plotting():
+def test_import_does_not_load_the_drawing_readers_solve_ivp_or_plotting():
     code = ("import sys, skatetrace.cli; "
-            "print(' '.join(m for m in ('svgpathtools', 'scipy.interpolate', 'matplotlib') if m in sys.modules))")
+            "print(' '.join(m for m in ('svgpathtools', 'scipy.interpolate', 'scipy.integrate', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == ""

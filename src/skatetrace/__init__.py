@@ -8,8 +8,8 @@ named like their modules; they are bound at import so that the name always means
 
 from importlib import import_module
 
-from .simulate import Trajectory, simulate
-from .verify import VerificationReport, schedule_from_trace, verify
+from .simulate import Trajectory, simulate  # noqa: F401 (re-exported)
+from .verify import VerificationReport, schedule_from_trace, verify  # noqa: F401 (re-exported)
 
 _EXPORTS = {
     "curves": ("Drawing", "Path"),

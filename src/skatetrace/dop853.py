@@ -137,24 +137,21 @@ def dense_coefficients(Kx, h, y_old, y_new, f_new, F):
 
 
 @njit(cache=True)
-def interpolate_into(t_old, h, y_old, F, t, out, col):
-    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``) at ``t``, into ``out[:, col]``."""
+def interpolate_into(t_old, h, y_old, F, t, out):
+    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``) at ``t``, into ``out``.
+
+    Scalar loops into a buffer: for each component the same operations in the same order as
+    scipy's array form, so the same bits.
+    """
     x = (t - t_old) / h
     npow = F.shape[0]
-    for i in range(y_old.size):
-        y = 0.0
-        for r in range(npow - 1, -1, -1):
-            y += F[r, i]
-            if (npow - 1 - r) % 2 == 0:
-                y *= x
-            else:
-                y *= 1.0 - x
-        out[i, col] = y + y_old[i]
-
-
-@njit(cache=True)
-def interpolate(t_old, h, y_old, F, t):
-    """DOP853's dense output on one step at ``t``, as a new array."""
-    out = np.empty((y_old.size, 1))
-    interpolate_into(t_old, h, y_old, F, t, out, 0)
-    return out[:, 0]
+    n = y_old.size
+    for k in range(n):
+        out[k] = 0.0
+    for i in range(npow - 1, -1, -1):
+        w = x if (npow - 1 - i) % 2 == 0 else 1.0 - x
+        for k in range(n):
+            out[k] = (out[k] + F[i, k]) * w
+    for k in range(n):
+        out[k] += y_old[k]
+    return out

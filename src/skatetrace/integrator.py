@@ -32,22 +32,15 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dop
 
+from . import dop853 as rk
 from .model import SleighParams
 
 __all__ = ["DenseSolution", "IntegrationResult", "integrate_legs"]
 
-_NS = _dop.N_STAGES  # 12
-_A = np.ascontiguousarray(_dop.A[:_NS, :_NS])
-_B = np.ascontiguousarray(_dop.B)
-_C = np.ascontiguousarray(_dop.C[:_NS])
-_E3 = np.ascontiguousarray(_dop.E3)
-_E5 = np.ascontiguousarray(_dop.E5)
-_D = np.ascontiguousarray(_dop.D)
-_A_EXTRA = np.ascontiguousarray(_dop.A[_NS + 1:])
-_C_EXTRA = np.ascontiguousarray(_dop.C[_NS + 1:])
-_POWER = _dop.INTERPOLATOR_POWER  # 7
+# scipy's DOP853 tableau (:mod:`skatetrace.dop853`, shared with the compiled replay)
+_NS, _A, _B, _C = rk.N_STAGES, rk.A, rk.B, rk.C
+_A_EXTRA, _C_EXTRA, _POWER = rk.A_EXTRA, rk.C_EXTRA, rk.POWER
 
 # Status codes of the compiled loop
 _REACHED, _STOPPED, _SINGULAR = 0, 1, 2
@@ -122,33 +115,6 @@ def _speed(M, m, I, coef, s0, alpha, t, y, work):
 
 
 @njit(cache=True)
-def _rms(x):
-    return math.sqrt(np.sum(x * x) / x.size)
-
-
-@njit(cache=True)
-def _interpolate(t_old, h, y_old, F, t, out):
-    """DOP853's dense output on one step (scipy's ``Dop853DenseOutput``), written into ``out``.
-
-    Scalar loops into a buffer (the event bisection calls this some fifty times per event): for
-    each component the same operations in the same order as scipy's array form, so the same bits.
-    """
-    x = (t - t_old) / h
-    npow = F.shape[0]
-    n = y_old.size
-    for k in range(n):
-        out[k] = 0.0
-    # the components side by side (independent chains of operations, each in scipy's order)
-    for i in range(npow - 1, -1, -1):
-        w = x if (npow - 1 - i) % 2 == 0 else 1.0 - x
-        for k in range(n):
-            out[k] = (out[k] + F[i, k]) * w
-    for k in range(n):
-        out[k] += y_old[k]
-    return out
-
-
-@njit(cache=True)
 def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g, work):
     """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit.
 
@@ -184,16 +150,7 @@ def _dense_coefficients(M, m, I, coef, s0, alpha, t_old, h, y_old, y_new, f_new,
                 dy += _A_EXTRA[row, j] * Kx[j, i]
             ytmp[i] = y_old[i] + dy * h
         _rhs_leg(M, m, I, coef, s0, alpha, t_old + _C_EXTRA[row] * h, ytmp, Kx[s])
-    for i in range(n):
-        dy = y_new[i] - y_old[i]
-        F[0, i] = dy
-        F[1, i] = h * Kx[0, i] - dy
-        F[2, i] = 2.0 * dy - h * (f_new[i] + Kx[0, i])
-        for r in range(4):
-            acc = 0.0
-            for j in range(16):
-                acc += _D[r, j] * Kx[j, i]
-            F[3 + r, i] = h * acc
+    rk.dense_coefficients(Kx, h, y_old, y_new, f_new, F)
     return F
 
 
@@ -203,23 +160,11 @@ def _initial_step(M, m, I, coef, s0, alpha, t0, y0, f0, t_bound, direction, rtol
     interval = abs(t_bound - t0)
     if interval == 0.0:
         return 0.0
-    scale = atol + np.abs(y0) * rtol
-    d0 = _rms(y0 / scale)
-    d1 = _rms(f0 / scale)
-    if d0 < 1e-5 or d1 < 1e-5:
-        h0 = 1e-6
-    else:
-        h0 = 0.01 * d0 / d1
-    h0 = min(h0, interval)
+    h0, d1, scale = rk.initial_step_trial(y0, f0, interval, rtol, atol)
     y1 = y0 + h0 * direction * f0
     f1 = np.empty(y0.size)
     _rhs_leg(M, m, I, coef, s0, alpha, t0 + h0 * direction, y1, f1)
-    d2 = _rms((f1 - f0) / scale) / h0
-    if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
-    return min(100.0 * h0, h1, interval)
+    return rk.initial_step(h0, d1, scale, f0, f1, interval)
 
 
 @njit(cache=True)
@@ -330,33 +275,10 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                     return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
                 for i in range(n):
                     K[_NS, i] = f_new[i]
-                e5n = 0.0
-                e3n = 0.0
-                for i in range(n):
-                    sc = atol + max(abs(y[i]), abs(ynew[i])) * rtol
-                    e5 = 0.0
-                    e3 = 0.0
-                    for j in range(_NS + 1):
-                        e5 += _E5[j] * K[j, i]
-                        e3 += _E3[j] * K[j, i]
-                    e5n += (e5 / sc) ** 2
-                    e3n += (e3 / sc) ** 2
-                if e5n == 0.0 and e3n == 0.0:
-                    err = 0.0
-                else:
-                    err = h_abs * e5n / math.sqrt((e5n + 0.01 * e3n) * n)
-                if err < 1.0:
-                    factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
-                    if rejected:
-                        factor = min(1.0, factor)
-                    h_abs *= factor
-                    accepted = True
-                else:
-                    if err != err:  # NaN: shrink as far as scipy would
-                        h_abs *= 0.2
-                    else:
-                        h_abs *= max(0.2, 0.9 * err ** (-1.0 / 8.0))
-                    rejected = True
+                err = rk.error_norm(K, y, ynew, h_abs, rtol, atol)
+                h_abs *= rk.step_factor(err, rejected)
+                accepted = err < 1.0
+                rejected = not accepted
             finite = True
             for i in range(n):
                 if not math.isfinite(ynew[i]):
@@ -386,7 +308,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                         mid = 0.5 * (lo + hi)
                         if mid == lo or mid == hi:
                             break
-                        _event_values(M, m, I, coef, s0, alpha, mid, _interpolate(t, h, y, F, mid, yint), switch,
+                        _event_values(M, m, I, coef, s0, alpha, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
                                       stop_event, sing_limit, g, work)
                         if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
                             lo, glo = mid, g[e]
@@ -409,7 +331,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                 step_leg[nsteps] = leg
                 nsteps += 1
             if hit >= 0:
-                yh = _interpolate(t, h, y, F, t_hit, np.empty(n))
+                yh = rk.interpolate_into(t, h, y, F, t_hit, np.empty(n))
                 if hit == 0 and leg + 1 < nlegs:
                     t, y = t_hit, yh
                     leg_bounds[leg + 1] = t

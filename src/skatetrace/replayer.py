@@ -156,7 +156,7 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
                 if t_out[j] == t_new:
                     out[:, j] = ynew
                 else:
-                    rk.interpolate_into(t, h, y, F, t_out[j], out, j)
+                    rk.interpolate_into(t, h, y, F, t_out[j], out[:, j])
                 j += 1
         t = t_new
         y[:] = ynew
