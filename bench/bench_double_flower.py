@@ -12,6 +12,9 @@ Run: python bench/bench_double_flower.py [N] [--cold K] [--figure NAME] [--quiet
   for its own work and the median time of ``python -c "import skatetrace.cli"`` (start-up and imports).
   If ``python -m skatetrace.cli`` does not run, the ``skatetrace`` console script next to
   ``sys.executable`` is used. ``--cold 0`` skips this part.
+- engines: the replay once more with ``verify.replay(..., engine="scipy")`` (solve_ivp with a Python
+  right-hand side, the pre-compilation path) beside the median compiled replay, in this process:
+  their ratio is the compiled replay's speed-up (``--no-engines`` skips it).
 ``--figure`` takes any built-in figure (``line`` or ``circle`` for a quick check). Timings are never asserted.
 """
 
@@ -26,7 +29,7 @@ import time
 from pathlib import Path
 
 from skatetrace import pattern, trace_figure
-from skatetrace.verify import schedule_from_trace
+from skatetrace.verify import replay, schedule_from_trace
 
 if str(Path(__file__).resolve().parent) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -91,6 +94,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--cold", type=int, default=3, help="cold CLI runs (default 3; 0 skips them)")
     ap.add_argument("--figure", default="double-flower", help="built-in figure (default double-flower)")
     ap.add_argument("--quiet", action="store_true", help="print nothing; just return the results")
+    ap.add_argument("--no-engines", action="store_true", help="do not time the solve_ivp replay for comparison")
     args = ap.parse_args(argv)
     print = quiet_print(args.quiet)
 
@@ -115,6 +119,14 @@ def main(argv=None) -> dict:
         print(f"  {label:9s} {med[k]:8.3f} s" + (f"   {share[k]:6.1%} of the total" if k in share else ""))
     print(f"  max deviation {rep.max_deviation:.2e} (tolerance {rep.tolerance:.2e}), "
           f"max cusp speed {rep.max_cusp_speed:.2e}")
+    if not args.no_engines:
+        sch, _ = schedule_from_trace(tr)
+        t0 = time.perf_counter()
+        replay(tr, sch, engine="scipy")
+        slow = time.perf_counter() - t0
+        out["engines"] = {"scipy_s": slow, "compiled_s": med["replay"], "ratio": slow / med["replay"]}
+        print(f"replay through solve_ivp (engine='scipy'): {slow:.2f} s, {slow / med['replay']:.0f} times the "
+              f"compiled replay's {med['replay']:.3f} s")
     if args.cold > 0:
         cold = cold_runs(args.figure, args.cold)
         out["cold"] = cold

@@ -360,6 +360,12 @@ def write_markdown(path: Path, res: dict, meta: dict) -> None:
             rows.append(["  `import skatetrace.cli` alone", f"{c['import_median']:.3f}", "",
                          ", ".join(f"{v:.3f}" for v in c["import"])])
         L += _table(["stage", "median s", "share of warm total", "runs s"], rows)
+        e = fl.get("engines")
+        if e:
+            L += ["", f"The same replay through scipy's `solve_ivp` with a Python right-hand side "
+                  f"(`verify.replay(..., engine=\"scipy\")`, the path before the compiled replay), once in the "
+                  f"same process: {e['scipy_s']:.2f} s, {e['ratio']:.0f} times the compiled replay's "
+                  f"{e['compiled_s']:.3f} s."]
         if c:
             L += ["", f"Cold command: `{' '.join(c['command'])}` (exit codes {c['returncodes']}; files written: "
                   f"{', '.join(c['files'])}). The CLI also resolves the figure, may add rests and writes the files."]
