@@ -172,6 +172,20 @@ def test_one_sided_limits_at_a_smooth_join():
         sec.evaluate([tj], side="middle")
 
 
+def test_time_at_length_at_joins_and_in_between():
+    # joins are breakpoints and come back exactly; other lengths by bisection, to the time's rounding
+    tr = trace_figure(pattern("s-bend"), P)
+    sec = tr.sections[0]
+    ends = np.cumsum([p.segment.length for p in sec.section.pieces])
+    joins = sec.time_at_length(ends[:-1])
+    assert set(joins.tolist()) <= set(sec.breakpoints().tolist())
+    lengths = np.array([0.0, 0.137, 0.5 * ends[0], ends[0] + 0.25, 0.999 * ends[-1]])
+    times = sec.time_at_length(lengths)
+    assert times[0] == 0.0 and np.all(np.diff(times) > 0)
+    np.testing.assert_allclose(sec.evaluate(times, geometry=False)["s"], lengths, rtol=0, atol=1e-12)
+    assert sec.time_at_length(0.137) == times[1]  # a scalar in, a scalar out
+
+
 def test_sections_after_a_failed_one_are_still_verified():
     opts = TraceOptions(glide_lateral=-P.I / P.M)  # the arc glides at its singular point: refused
     fig = Figure("mix2", (Curve((Segment(1.0, 2.0), Segment(0.0, 1.0)), (Join("cusp", 0.5),), name="mix2"),))
