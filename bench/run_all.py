@@ -368,7 +368,9 @@ def write_markdown(path: Path, res: dict, meta: dict) -> None:
                   f"{e['compiled_s']:.3f} s."]
         if c:
             L += ["", f"Cold command: `{' '.join(c['command'])}` (exit codes {c['returncodes']}; files written: "
-                  f"{', '.join(c['files'])}). The CLI also resolves the figure, may add rests and writes the files."]
+                  f"{', '.join(c['files'])}). The CLI also resolves the figure, may add rests and writes the files. "
+                  "The package was byte-compiled first (`compileall`, as `pip install` does), so a cold start "
+                  "loads bytecode" + ("" if c.get("byte_compiled", True) else " (compileall reported an error)") + "."]
     lf = res.get("long_figure")
     if lf:
         L += ["", _scenario_header(meta, "long_figure", f"3. A long figure: {lf['pieces']} distinct arcs")]
