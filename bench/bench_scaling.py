@@ -1,12 +1,13 @@
 """Benchmark: how the cost grows with the number of pieces and with the requested fit tolerance.
 
-Run: python bench/bench_scaling.py [--quick] [--sizes N ...] [--verify-max N] [--budget S]
+Run: python bench/bench_scaling.py [--quick] [--sizes N ...] [--runs R] [--verify-max N] [--budget S]
                                    [--tols T ...] [--trace-tols T ...] [--quiet]
 
 Pieces: ``_common.distinct_arcs(n)`` (distinct arcs joined at cusps, seed 0; the figures are nested,
 each size's arcs the first of the next) for each size (default
 1, 10, 100, 1000; ``--quick`` keeps those <= 100): trace time for every size, sample and verify
-times for sizes up to ``--verify-max``. A size is not run (the reason recorded) when its trace time,
+times for sizes up to ``--verify-max``, each the median of ``--runs`` runs (default 3: one run
+alone lets a moment of load on a shared machine bend the slope). A size is not run (the reason recorded) when its trace time,
 extrapolated from the sizes before it (see ``extrapolate``: never below linear), exceeds ``--budget``
 seconds (default 600); it is traced but not verified when trace + sample + verify would exceed it. Least-squares slopes of
 log(time) against log(pieces), over all measured sizes and over sizes >= 10 (where per-call overhead
@@ -54,7 +55,7 @@ def extrapolate(rows, key: str, n: int) -> float:
     return last[key] * (n / last["pieces"]) ** slope
 
 
-def pieces_scaling(sizes, verify_max: int, budget: float, print=print) -> dict:
+def pieces_scaling(sizes, verify_max: int, budget: float, print=print, runs: int = 3) -> dict:
     rows = []
     print(f"{'pieces':>6} {'sim time':>8} {'trace s':>8} {'ms/piece':>8} {'sample s':>8} {'verify s':>8} "
           f"{'ms/piece':>8} {'replay s':>8} {'checks s':>8} {'failed':>6} {'verified':>8}  note")
@@ -75,7 +76,7 @@ def pieces_scaling(sizes, verify_max: int, budget: float, print=print) -> dict:
                          f"> budget {budget:.0f} s")
         elif est_trace + est_ver > 0:
             notes.append(f"extrapolated {est_trace + est_ver:.0f} s")
-        r = measure(n, 0, 1, do_verify)
+        r = measure(n, 0, runs, do_verify)
         r["skipped"] = False
         r["note"] = "; ".join(notes)
         if r["failed"]:
@@ -158,6 +159,7 @@ def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="sizes <= 100 only")
     ap.add_argument("--sizes", type=int, nargs="+", default=[1, 10, 100, 1000], help="numbers of distinct arcs")
+    ap.add_argument("--runs", type=int, default=3, help="runs per size, median reported (default 3)")
     ap.add_argument("--verify-max", type=int, default=1000, help="verify sizes up to this (default 1000)")
     ap.add_argument("--budget", type=float, default=600.0,
                     help="skip a stage of a size whose time, extrapolated linearly, exceeds this (s; default 600)")
@@ -172,7 +174,7 @@ def main(argv=None) -> dict:
     print = quiet_print(args.quiet)
     sizes = sorted(set(n for n in args.sizes if n <= 100 or not args.quick))
     warm_up()
-    out = {"quick": args.quick, "pieces": pieces_scaling(sizes, args.verify_max, args.budget, print)}
+    out = {"quick": args.quick, "pieces": pieces_scaling(sizes, args.verify_max, args.budget, print, args.runs)}
     if args.tols:
         out["tolerance"] = tolerance_scaling(args.tols, args.trace_tols, args.fit_runs, print, args.drawing)
     return out

@@ -49,13 +49,13 @@ MODES = {
         "paper_arcs": ["1"],
         "double_flower": ["1", "--cold", "1"],
         "long_figure": ["--pieces", "200"],
-        "scaling": ["--quick", "--tols", "1e-2", "1e-3", "1e-4", "--trace-tols", "1e-2", "--fit-runs", "1"],
+        "scaling": ["--quick", "--runs", "1", "--tols", "1e-2", "1e-3", "1e-4", "--trace-tols", "1e-2", "--fit-runs", "1"],
     },
     "smoke": {
         "paper_arcs": ["1", "--maxiter", "1"],
         "double_flower": ["1", "--cold", "1", "--figure", "line"],
         "long_figure": ["--pieces", "3"],
-        "scaling": ["--sizes", "1", "2", "--tols", "1e-2", "--trace-tols", "--fit-runs", "1"],
+        "scaling": ["--sizes", "1", "2", "--runs", "1", "--tols", "1e-2", "--trace-tols", "--fit-runs", "1"],
     },
 }
 SCRIPTS = {"paper_arcs": bench_paper_arcs, "double_flower": bench_double_flower, "long_figure": bench_long_figure,
@@ -206,6 +206,12 @@ def _table(header: list[str], rows: list[list]) -> list[str]:
     out = ["| " + " | ".join(cell(c) for c in header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     out += ["| " + " | ".join(cell(c) for c in r) + " |" for r in rows]
     return out
+
+
+def _runs(pieces: dict) -> str:
+    """How many runs each size's figures come from: "one run" or "the median of N runs"."""
+    n = max((r.get("runs", 1) for r in pieces["rows"] if not r["skipped"]), default=1)
+    return "one run" if n == 1 else f"the median of {n} runs"
 
 
 def _met(m) -> str:
@@ -400,7 +406,7 @@ def write_markdown(path: Path, res: dict, meta: dict) -> None:
         p = sc["pieces"]
         L += ["", _scenario_header(meta, "scaling", "4. Scaling")]
         L += ["### Versus the number of pieces", "",
-              "Nested figures from the same generator (the first n arcs of seed 0), one run each. A size is "
+              f"Nested figures from the same generator (the first n arcs of seed 0), {_runs(p)} each. A size is "
               "traced only, or not run, when its time extrapolated from the smaller sizes (a power law through "
               f"the last two, never below linear) exceeds {p['budget_s']:.0f} s; the note says which.",
               ""]
