@@ -116,6 +116,8 @@ def test_verify_engines_agree(flower):
     fast = verify_module.replay(tr, schedule)
     slow = verify_module.replay(tr, schedule, engine="scipy")
     np.testing.assert_array_equal(fast.t, slow.t)
+    # the compiled replay reports the controls it integrated with: the schedule's own interpolant
+    np.testing.assert_array_equal(fast.controls, slow.controls)
     # the open-loop replay carries rounding differences through 32 sections: still far below the tolerance
     assert np.max(np.abs(fast.state[3:] - slow.state[3:])) < 1e-7 * tr.figure.size()
     with pytest.raises(ValueError, match="engine"):

@@ -64,6 +64,17 @@ def _controls(knots, ca, cb, t, ctl):
 
 
 @njit(cache=True)
+def _controls_at(knots, ca, cb, t_out):
+    """``(a, b, adot, bdot)`` at the sorted times ``t_out``, shape ``(4, len(t_out))``."""
+    out = np.empty((4, t_out.size))
+    ctl = np.zeros(5)
+    for j in range(t_out.size):
+        _controls(knots, ca, cb, t_out[j], ctl)
+        out[:, j] = ctl[:4]
+    return out
+
+
+@njit(cache=True)
 def _rhs(M, m, I, knots, ca, cb, t, y, out, ctl):
     """Eqs. (p1_eq)-(y_eq) for the state ``(p1, p2, theta, x, y)``."""
     _controls(knots, ca, cb, t, ctl)
@@ -170,6 +181,8 @@ class ChunkReplay:
 
     ``states`` has shape ``(5, len(t_out))`` (p1, p2, theta, x, y) and is NaN at the requested
     times a failed integration did not reach; ``t_end`` and ``y_end`` are where it got to.
+    ``controls`` has shape ``(4, len(t_out))``: the interpolated ``a, b, adot, bdot`` the
+    integration used, at the same times.
     """
 
     success: bool
@@ -178,6 +191,7 @@ class ChunkReplay:
     t_end: float
     y_end: np.ndarray
     states: np.ndarray
+    controls: np.ndarray
     nfev: int
     nsteps: int
 
@@ -226,4 +240,4 @@ def replay_chunk(params: SleighParams, state0, schedule: ControlSchedule, i0: in
     if status:
         message = f"integration failed at t = {t:.6g}: {message}"
     return ChunkReplay(success=status == 0, status=status, message=message, t_end=float(t), y_end=y,
-                       states=out, nfev=int(nfev), nsteps=int(nsteps))
+                       states=out, controls=_controls_at(knots, ca, cb, tt), nfev=int(nfev), nsteps=int(nsteps))

@@ -131,9 +131,8 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
     for i0, i1 in schedule.chunks():
         si = int(schedule.section[i0])
         sec = trace.sections[si]
-        f = schedule.interpolant(i0, i1)
         t0, t1 = float(schedule.t[i0]), float(schedule.t[i1 - 1])
-        a, b, ad, bd = (float(v) for v in f(t0))
+        a, b, ad, bd = schedule.a[i0], schedule.b[i0], schedule.adot[i0], schedule.bdot[i0]
         if si != prev_section:
             first = sec.section.pieces[0]
             # Start from the figure's own layout at a curve's start or after a section that could
@@ -153,13 +152,13 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
         # NaN where a failed integration did not reach: verify reports it
         if engine == "compiled":
             run = replay_chunk(params, y, schedule, i0, i1, tt, rtol=rtol, atol=atol)
-            ys, y_end = run.states, run.y_end
+            ys, y_end, cs = run.states, run.y_end, run.controls
         else:
             traj = simulate(params, y, schedule.scalar_interpolant(i0, i1), (t0, t1), rtol=rtol, atol=atol)
-            ys, y_end = traj(tt), traj.state[:, -1]
+            ys, y_end, cs = traj(tt), traj.state[:, -1], np.vstack(schedule.interpolant(i0, i1)(tt))
         ts.append(tt)
         states.append(ys)
-        ctrls.append(np.vstack(f(tt)))
+        ctrls.append(cs)
         secs.append(np.full(n, si))
         idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
         pieces.append(schedule.piece[i0:i1][idx])
