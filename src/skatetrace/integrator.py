@@ -352,21 +352,13 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
 def _evaluate_steps(t_old, h, y_old, F, steps, t):
     """The dense output at times ``t``, each on its step ``steps[k]``: shape ``(t.size, n)``.
 
-    :func:`_interpolate` point by point (the same operations as scipy's vectorised form), written
-    out with plain indices: this samples thousands of points per section.
+    :func:`skatetrace.dop853.interpolate_into` point by point (the same operations as scipy's
+    vectorised form): this samples thousands of points per section.
     """
-    n = y_old.shape[1]
-    npow = F.shape[1]
-    out = np.zeros((t.size, n))
+    out = np.empty((t.size, y_old.shape[1]))
     for p in range(t.size):
         i = steps[p]
-        x = (t[p] - t_old[i]) / h[i]
-        for j in range(npow - 1, -1, -1):
-            w = x if (npow - 1 - j) % 2 == 0 else 1.0 - x
-            for k in range(n):
-                out[p, k] = (out[p, k] + F[i, j, k]) * w
-        for k in range(n):
-            out[p, k] += y_old[i, k]
+        rk.interpolate_into(t_old[i], h[i], y_old[i], F[i], t[p], out[p])
     return out
 
 
