@@ -212,7 +212,9 @@ def _trace(args) -> int:
         from .plotting import save_all
 
         save_all(trace, report, out)
-    if not args.no_viewer:
+    if not args.no_viewer and schedule.t.size < 2:
+        print("note: viewer.html not written: no section could be traced, so there is nothing to play")
+    elif not args.no_viewer:
         from .playback import load_playback
         from .viewer import write_viewer
 

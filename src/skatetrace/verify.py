@@ -163,6 +163,10 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
         idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
         pieces.append(schedule.piece[i0:i1][idx])
         y = y_end
+    if not ts:
+        # No section was traced (every one failed): nothing to replay, which verify reports.
+        return Replay(t=np.empty(0), state=np.empty((5, 0)), controls=np.empty((4, 0)),
+                      section=np.empty(0, dtype=int), piece=np.empty(0, dtype=int))
     return Replay(t=np.concatenate(ts), state=np.hstack(states), controls=np.hstack(ctrls),
                   section=np.concatenate(secs), piece=np.concatenate(pieces))
 
