@@ -36,3 +36,229 @@ def test_result_records_every_tracer_setting():
     options = st.TraceOptions(speed=1.5, placement="first", search=3)
     d = result_dict(st.trace_figure(st.pattern("circle"), options=options))
     assert d["options"] == asdict(options)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# strict JSON, file modes, output folders
+
+import json
+import math
+import stat
+import subprocess
+import sys
+
+import numpy as np
+
+from skatetrace.errors import SkatetraceError
+from skatetrace.io import (MANIFEST, OutputFolder, adopt, check_output_file, check_output_folder, dumps_json,
+                           file_mode, write_atomically)
+
+
+def strict_loads(text):
+    """json.loads that rejects NaN, Infinity and -Infinity, as JSON parsers outside Python do."""
+    def reject(name):
+        raise ValueError(f"not JSON: {name}")
+    return json.loads(text, parse_constant=reject)
+
+
+def test_strict_loads_rejects_what_python_writes_by_default():
+    with pytest.raises(ValueError, match="NaN"):
+        strict_loads(json.dumps({"a": float("nan")}))
+    with pytest.raises(ValueError, match="Infinity"):
+        strict_loads(json.dumps([float("-inf")]))
+
+
+def test_dumps_json_writes_null_for_nan_and_infinities():
+    data = {"nan": float("nan"), "inf": np.float64(np.inf), "arr": np.array([1.0, -np.inf]), "i": np.int64(3),
+            "ok": np.bool_(True), "nested": [{"x": (float("nan"), 2.5)}]}
+    parsed = strict_loads(dumps_json(data))
+    assert parsed == {"nan": None, "inf": None, "arr": [1.0, None], "i": 3, "ok": True,
+                      "nested": [{"x": [None, 2.5]}]}
+
+
+def _read_umask_in_child(umask):
+    code = ("import os, pathlib, sys; os.umask(int(sys.argv[1], 8)); "
+            "from skatetrace.io import atomic_write, file_mode; p = pathlib.Path(sys.argv[2]); "
+            "atomic_write(p, 'x'); print(oct(os.stat(p).st_mode & 0o777), oct(file_mode()))")
+    return code
+
+
+@pytest.mark.parametrize("umask, mode", [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_files_get_the_umasks_permissions_not_0600(tmp_path, umask, mode):
+    # in a child process: the umask is process-wide, and other threads of this one may create files
+    code = _read_umask_in_child(umask)
+    p = tmp_path / f"f{umask:o}.json"
+    out = subprocess.run([sys.executable, "-c", code, f"{umask:o}", str(p)], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == [oct(mode), oct(mode)]
+    assert stat.S_IMODE(p.stat().st_mode) == mode
+
+
+def test_file_mode_follows_this_process_umask(tmp_path):
+    old = os.umask(0o027)
+    try:
+        assert file_mode() == 0o640
+        write_atomically(tmp_path / "a.txt", lambda tmp: tmp.write_text("x"))
+        assert stat.S_IMODE((tmp_path / "a.txt").stat().st_mode) == 0o640
+    finally:
+        os.umask(old)
+
+
+def test_file_mode_without_proc(monkeypatch):
+    import builtins
+
+    real_open = builtins.open
+
+    def no_proc(path, *args, **kwargs):
+        if str(path).startswith("/proc"):
+            raise FileNotFoundError(path)
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", no_proc)
+    old = os.umask(0o077)
+    try:
+        assert file_mode() == 0o600
+        assert os.umask(0o077) == 0o077  # and the umask is as it was
+    finally:
+        os.umask(old)
+
+
+@pytest.mark.parametrize("below, match", [
+    ((), "f is a file, not a folder; give the name of a folder"),
+    (("sub",), "cannot create folder .*sub: .*f is a file, not a folder"),
+    (("a", "b"), "cannot create folder .*b: .*f is a file, not a folder"),
+])
+def test_output_folder_that_cannot_be_is_a_clear_error(tmp_path, below, match):
+    (tmp_path / "f").write_text("x")
+    target = tmp_path.joinpath("f", *below)
+    with pytest.raises(SkatetraceError, match=match):
+        check_output_folder(target)
+    assert (tmp_path / "f").read_text() == "x"  # nothing lost
+
+
+def test_output_folder_not_writable_is_a_clear_error(tmp_path, monkeypatch):
+    import tempfile
+
+    def denied(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "mkstemp", denied)
+    with pytest.raises(SkatetraceError, match=r"cannot write in folder .*Permission denied.*--out must be a folder"):
+        check_output_folder(tmp_path / "new" / "deeper")
+    assert not (tmp_path / "new").exists()  # the folders the check made are gone again
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
+def test_output_folder_under_a_read_only_folder(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        with pytest.raises(SkatetraceError, match="cannot create folder"):
+            check_output_folder(ro / "out")
+    finally:
+        ro.chmod(0o755)
+
+
+def test_output_folder_is_created_and_left_clean(tmp_path):
+    created = check_output_folder(tmp_path / "a" / "b")
+    assert created == [tmp_path / "a", tmp_path / "a" / "b"]
+    assert list((tmp_path / "a" / "b").iterdir()) == []
+    with pytest.raises(SkatetraceError, match="figures is a file"):
+        (tmp_path / "a" / "b" / "figures").write_text("mine")
+        check_output_folder(tmp_path / "a" / "b", subfolders=("figures",))
+
+
+@pytest.mark.parametrize("name, kwargs, match", [
+    ("x.avi", {"suffixes": (".gif", ".mp4", ".png")}, r"must end in \.gif, \.mp4 or \.png \(got '\.avi'\)"),
+    ("noext", {"suffixes": (".gif",)}, r"must end in \.gif \(got 'no suffix'\)"),
+    ("missing/x.gif", {"create_parent": False}, "folder .*missing does not exist"),
+    ("f/x.gif", {}, "f is a file, not a folder"),
+    ("d", {}, "is a folder; give the name of a file"),
+])
+def test_output_file_checks(tmp_path, name, kwargs, match):
+    (tmp_path / "f").write_text("x")
+    (tmp_path / "d").mkdir()
+    with pytest.raises(SkatetraceError, match=match):
+        check_output_file(tmp_path / name, **kwargs)
+
+
+def test_output_folder_removes_only_its_own_stale_files(tmp_path):
+    out = tmp_path / "out"
+    with OutputFolder(out, "trace") as first:
+        for name in ("result.json", "a.png", "b.png"):
+            atomic_write(out / name, "1")
+        atomic_write(tmp_path / "elsewhere.txt", "not in the folder")
+    assert first.finish() == []
+    assert strict_loads((out / MANIFEST).read_text())["files"] == ["a.png", "b.png", "result.json"]
+    (out / "notes.txt").write_text("mine")
+    second = OutputFolder(out, "trace")
+    with second:
+        atomic_write(out / "result.json", "2")
+        atomic_write(out / "c.png", "2")
+    assert second.finish() == ["a.png", "b.png"]
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "c.png", "notes.txt", "result.json"]
+    assert strict_loads((out / MANIFEST).read_text())["files"] == ["c.png", "result.json"]
+    assert (tmp_path / "elsewhere.txt").exists()
+
+
+def test_interrupted_run_keeps_its_files_known(tmp_path):
+    out = tmp_path / "out"
+    with OutputFolder(out, "trace"):
+        atomic_write(out / "a.png", "1")
+    # no finish(): as if interrupted. The next run still owns a.png and removes it.
+    nxt = OutputFolder(out, "trace")
+    with nxt:
+        atomic_write(out / "b.png", "2")
+    assert nxt.finish() == ["a.png"]
+
+
+def test_a_run_that_wrote_nothing_removes_nothing(tmp_path):
+    out = tmp_path / "out"
+    with OutputFolder(out, "trace") as run:
+        atomic_write(out / "a.png", "1")
+    run.finish()
+    again = OutputFolder(out, "trace")
+    assert again.finish() == [] and (out / "a.png").exists()
+
+
+def test_manifest_entries_outside_the_folder_are_ignored(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (tmp_path / "victim.txt").write_text("keep")
+    (out / MANIFEST).write_text(json.dumps({"schema": "skatetrace.manifest/1", "files": ["../victim.txt",
+                                            str(tmp_path / "victim.txt"), "ok.png"]}))
+    (out / "ok.png").write_text("old")
+    with OutputFolder(out, "trace") as run:
+        atomic_write(out / "new.png", "x")
+    assert run.finish() == ["ok.png"]
+    assert (tmp_path / "victim.txt").read_text() == "keep"
+
+
+def test_folders_from_before_manifests_are_recognised_by_their_schema(tmp_path):
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "result.json").write_text(json.dumps({"schema": "skatetrace.result/1"}))
+    for name in ("figure.png", "viewer.html", "notes.txt"):
+        (old / name).write_text("old")
+    with OutputFolder(old, "trace") as run:
+        atomic_write(old / "result.json", "{}")
+    assert run.finish() == ["figure.png", "viewer.html"]
+    # a folder that is not skatetrace's loses nothing, even files named like skatetrace's
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "figure.png").write_text("a user's picture")
+    with OutputFolder(mine, "trace") as run:
+        atomic_write(mine / "result.json", "{}")
+    assert run.finish() == [] and (mine / "figure.png").exists()
+
+
+def test_adopt_adds_a_later_file_to_the_runs_manifest(tmp_path):
+    out = tmp_path / "out"
+    with OutputFolder(out, "trace") as run:
+        atomic_write(out / "result.json", "{}")
+    run.finish()
+    atomic_write(out / "viewer.html", "<html>")
+    assert adopt(out / "viewer.html")
+    assert "viewer.html" in strict_loads((out / MANIFEST).read_text())["files"]
+    assert not adopt(tmp_path / "loose.html")
