@@ -138,17 +138,9 @@ def _write_fit(res, out: Path, plots: bool) -> list[Path]:
     written = [out / "fit.json"]
     atomic_write(out / "fit.json", json.dumps(_fit_summary(res), indent=2, default=float))
     if plots:
-        import matplotlib
+        from .plotting import fit_figure
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from .plotting import plot_fit
-
-        fig, ax = plt.subplots(figsize=(8, 8))
-        plot_fit(res.drawing, res.fit, ax)
-        fig.savefig(out / "fit.png", dpi=110)
-        plt.close(fig)
+        fit_figure(res.drawing, res.fit, exact=res.exact, unit=res.unit).savefig(out / "fit.png", dpi=110)
         written.append(out / "fit.png")
     return written
 
@@ -211,7 +203,7 @@ def _trace(args) -> int:
     if not args.no_plots:
         from .plotting import save_all
 
-        save_all(trace, report, out)
+        save_all(trace, report, out, unit=res.unit)
     if not args.no_viewer and schedule.t.size < 2:
         print("note: viewer.html not written: no section could be traced, so there is nothing to play")
     elif not args.no_viewer:
