@@ -15,10 +15,13 @@ from __future__ import annotations
 
 import json
 import math
+import reprlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from collections.abc import Iterable
 from typing import Any
+
+import numpy as np
 
 from .errors import FigureFormatError
 from .geometry import Pose, Segment, Spiral, end_pose, rigid_motion_centre
@@ -27,6 +30,24 @@ from .model import SleighParams
 __all__ = ["Join", "Curve", "Figure", "Placed", "Section", "SMOOTH", "figure_from_dict", "load_figure"]
 
 SCHEMA = "skatetrace.figure/1"
+
+#: Limits on a figure, so that untrusted input cannot ask for unbounded work or for numbers whose
+#: layout overflows or rounds away. Pieces of all copies of all curves (a traced section each at most):
+MAX_PIECES = 10_000
+#: Piece lengths and radii (1 / |curvature|) lie in [MIN_LENGTH, MAX_LENGTH]; start coordinates
+#: within MAX_LENGTH of the origin (in the figure's units: model units or metres).
+MIN_LENGTH = 1e-9
+MAX_LENGTH = 1e9
+#: Largest turn of the heading along one arc (radians; about 160 000 full turns): beyond it the
+#: heading's rounding error would move the arc's end by more than the verification tolerance.
+MAX_ARC_TURN = 1e6
+#: Largest turn of the heading along one spiral (radians): its layout integrates the heading on
+#: cells of 0.2 rad each, so this bounds the work per spiral.
+MAX_SPIRAL_TURN = 1e4
+
+
+def _is_real(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
 @dataclass(frozen=True, slots=True)
@@ -40,8 +61,10 @@ class Join:
     def __post_init__(self) -> None:
         if self.kind not in ("smooth", "cusp"):
             raise FigureFormatError(f"join kind must be 'smooth' or 'cusp', got {self.kind!r}")
-        if not math.isfinite(self.pivot):
-            raise FigureFormatError(f"pivot must be finite, got {self.pivot!r}")
+        if not (_is_real(self.pivot) and math.isfinite(self.pivot)):
+            raise FigureFormatError(f"pivot must be finite (a number of radians), got {self.pivot!r}")
+        if not isinstance(self.reverse, (bool, np.bool_)):
+            raise FigureFormatError(f"reverse must be True or False, got {self.reverse!r}")
         if self.kind == "smooth" and (self.pivot != 0.0 or self.reverse):
             raise FigureFormatError("a smooth join cannot pivot or reverse; use a cusp")
 
@@ -106,25 +129,32 @@ class Curve:
     def __post_init__(self) -> None:
         if not self.pieces:
             raise FigureFormatError(f"curve {self.name!r} has no pieces")
+        if not (isinstance(self.repeat, int) and not isinstance(self.repeat, bool) and self.repeat >= 1):
+            raise FigureFormatError(f"curve {self.name!r}: repeat must be a whole number >= 1, got {self.repeat!r}")
+        if len(self.pieces) * self.repeat > MAX_PIECES:
+            raise FigureFormatError(f"curve {self.name!r}: {_count_pieces(len(self.pieces), self.repeat)}; at most "
+                                    f"{MAX_PIECES} pieces are allowed in a figure")
         for i, seg in enumerate(self.pieces):
-            if not isinstance(seg, (Segment, Spiral)):
-                raise FigureFormatError(f"curve {self.name!r}, piece {i}: expected a Segment or a Spiral, "
-                                        f"got {type(seg).__name__}")
-            if not (math.isfinite(seg.length) and seg.length > 0):
-                raise FigureFormatError(
-                    f"curve {self.name!r}, piece {i}: length must be positive and finite, got {seg.length!r}"
-                )
-            if not all(math.isfinite(c) for c in seg.coefficients) or len(seg.coefficients) != 4:
-                raise FigureFormatError(f"curve {self.name!r}, piece {i}: curvature must be finite")
+            _check_piece(seg, f"curve {self.name!r}, piece {i}")
+        if not isinstance(self.joins, tuple) or not all(isinstance(j, Join) for j in self.joins):
+            raise FigureFormatError(f"curve {self.name!r}: joins must be a tuple of Join, got {self.joins!r}")
         if len(self.joins) != len(self.pieces) - 1:
             raise FigureFormatError(
                 f"curve {self.name!r}: {len(self.pieces)} pieces need {len(self.pieces) - 1} joins, "
                 f"got {len(self.joins)}"
             )
-        if not (isinstance(self.repeat, int) and self.repeat >= 1):
-            raise FigureFormatError(f"curve {self.name!r}: repeat must be a whole number >= 1, got {self.repeat!r}")
+        if self.closing is not None and not isinstance(self.closing, Join):
+            raise FigureFormatError(f"curve {self.name!r}: the closing join must be a Join, got {self.closing!r}")
         if self.repeat > 1 and self.closing is None:
             raise FigureFormatError(f"curve {self.name!r}: a repeated curve needs a closing join")
+        start = self.start
+        if not (isinstance(start, tuple) and len(start) == 3
+                and all(_is_real(v) and math.isfinite(v) for v in start)):
+            raise FigureFormatError(f"curve {self.name!r}: start must be a Pose (x, y, heading) of finite numbers, "
+                                    f"got {start!r}")
+        if max(abs(start[0]), abs(start[1])) > MAX_LENGTH:
+            raise FigureFormatError(f"curve {self.name!r}: the start ({start[0]:g}, {start[1]:g}) must lie within "
+                                    f"{MAX_LENGTH:g} of the origin")
 
     def expanded(self) -> list[tuple[Segment | Spiral, Join | None]]:
         """All pieces of all copies, each with the join before it (``None`` first)."""
@@ -270,6 +300,12 @@ class Figure:
     def __post_init__(self) -> None:
         if not self.curves:
             raise FigureFormatError(f"figure {self.name!r} has no curves")
+        if not all(isinstance(c, Curve) for c in self.curves):
+            raise FigureFormatError(f"figure {self.name!r}: curves must be Curve objects")
+        total = sum(len(c.pieces) * c.repeat for c in self.curves)
+        if total > MAX_PIECES:
+            raise FigureFormatError(f"figure {self.name!r} has {total} pieces (all copies of all curves); "
+                                    f"at most {MAX_PIECES} are allowed")
 
     def size(self) -> float:
         """Larger side of the bounding box of the whole figure."""
@@ -292,6 +328,61 @@ class Figure:
         return out
 
 
+_REPR = reprlib.Repr()
+_REPR.maxstring, _REPR.maxother, _REPR.maxlevel = 60, 60, 3
+
+
+def _show(value: Any) -> str:
+    """``repr(value)`` cut short: untrusted input may be huge or deeply nested."""
+    return _REPR.repr(value)
+
+
+def _count_pieces(n: int, repeat: int) -> str:
+    if repeat == 1:
+        return f"{n} pieces"
+    return f"{n} piece{'s' if n != 1 else ''} repeated {repeat} times make {n * repeat} pieces"
+
+
+def _check_piece(seg, where: str) -> None:
+    """Raise :class:`FigureFormatError` unless ``seg`` is a piece within the figure limits."""
+    if not isinstance(seg, (Segment, Spiral)):
+        raise FigureFormatError(f"{where}: expected a Segment or a Spiral, got {type(seg).__name__}")
+    length = seg.length
+    if not (_is_real(length) and math.isfinite(length) and length > 0):
+        raise FigureFormatError(f"{where}: length must be positive and finite, got {length!r}")
+    if not MIN_LENGTH <= length <= MAX_LENGTH:
+        raise FigureFormatError(f"{where}: length must lie between {MIN_LENGTH:g} and {MAX_LENGTH:g}, got {length!r}")
+    coeffs = seg.coefficients
+    if len(coeffs) != 4 or not all(_is_real(c) and math.isfinite(c) for c in coeffs):
+        raise FigureFormatError(f"{where}: curvature must be finite numbers, got {coeffs!r}")
+    if isinstance(seg, Segment):
+        k = abs(seg.curvature)
+        if k > 1.0 / MIN_LENGTH:
+            raise FigureFormatError(f"{where}: radius must be at least {MIN_LENGTH:g} (|curvature| at most "
+                                    f"{1.0 / MIN_LENGTH:g}), got curvature {seg.curvature!r}")
+        if 0.0 < k < 1.0 / MAX_LENGTH:
+            raise FigureFormatError(f"{where}: radius must be at most {MAX_LENGTH:g} (use a line), got curvature "
+                                    f"{seg.curvature!r}")
+        if k * length > MAX_ARC_TURN:
+            raise FigureFormatError(f"{where}: an arc may turn by at most {MAX_ARC_TURN:g} rad "
+                                    f"({math.degrees(MAX_ARC_TURN):.3g} degrees), got {k * length:.3g} rad")
+        return
+    # A spiral: its largest |curvature| over the piece, computed in a way that cannot overflow to
+    # NaN first (each term bounded before the polynomial is evaluated).
+    bound = sum(abs(c) * length**j for j, c in enumerate(coeffs))
+    if not (math.isfinite(bound) and bound * length <= MAX_SPIRAL_TURN):
+        kmax = seg.max_abs_curvature() if math.isfinite(bound) else math.inf
+        if not (math.isfinite(kmax) and kmax * length <= MAX_SPIRAL_TURN and kmax <= 1.0 / MIN_LENGTH):
+            raise FigureFormatError(f"{where}: a spiral may turn by at most {MAX_SPIRAL_TURN:g} rad and its "
+                                    f"|curvature| be at most {1.0 / MIN_LENGTH:g}; curvature {list(coeffs)!r} over "
+                                    f"length {length!r} reaches {kmax:.3g}")
+    elif bound > 1.0 / MIN_LENGTH:
+        kmax = seg.max_abs_curvature()
+        if kmax > 1.0 / MIN_LENGTH:
+            raise FigureFormatError(f"{where}: a spiral's |curvature| must be at most {1.0 / MIN_LENGTH:g}, "
+                                    f"got up to {kmax:.3g}")
+
+
 def _apply_join(pose: Pose, direction: int, join: Join) -> tuple[Pose, int]:
     heading = pose.heading + join.pivot + (math.pi if join.reverse else 0.0)
     return Pose(pose.x, pose.y, heading), (-direction if join.reverse else direction)
@@ -308,9 +399,9 @@ def _segment_to_dict(seg: Segment | Spiral) -> dict[str, Any]:
 def _number(d: dict, key: str, where: str) -> float:
     value = d[key]
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 1e300:
-        raise FigureFormatError(f"{where}: {key!r} is too large, got {value!r}")
+        raise FigureFormatError(f"{where}: {key!r} is too large, got {_show(value)}")
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise FigureFormatError(f"{where}: {key!r} must be a finite number, got {value!r}")
+        raise FigureFormatError(f"{where}: {key!r} must be a finite number, got {_show(value)}")
     return float(value)
 
 
@@ -318,29 +409,29 @@ def _spiral_from_dict(d: dict, where: str) -> Spiral:
     coeffs = d.get("curvature")
     if not (isinstance(coeffs, list) and 1 <= len(coeffs) <= 4):
         raise FigureFormatError(f"{where}: a spiral needs 'curvature', a list of 1 to 4 polynomial coefficients "
-                                f"[c0, c1, c2, c3] of arc length from its start, got {coeffs!r}")
+                                f"[c0, c1, c2, c3] of arc length from its start, got {_show(coeffs)}")
     values = [_number({"curvature": c}, "curvature", where) for c in coeffs]
     if "length" not in d:
         raise FigureFormatError(f"{where}: a spiral needs a 'length'")
     length = _number(d, "length", where)
     if not length > 0:
-        raise FigureFormatError(f"{where}: length must be positive, got {length!r}")
+        raise FigureFormatError(f"{where}: length must be positive, got {_show(length)}")
     return Spiral(tuple(values + [0.0] * (4 - len(values))), length)
 
 
 def _segment_from_dict(d: Any, where: str) -> Segment | Spiral:
     if not isinstance(d, dict) or "type" not in d:
-        raise FigureFormatError(f"{where}: expected an object with 'type' ('arc', 'line' or 'spiral'), got {d!r}")
+        raise FigureFormatError(f"{where}: expected an object with 'type' ('arc', 'line' or 'spiral'), got {_show(d)}")
     kind = d["type"]
     if kind == "spiral":
         return _spiral_from_dict(d, where)
     if kind == "line":
         length = _number(d, "length", where) if "length" in d else None
         if length is None or length <= 0:
-            raise FigureFormatError(f"{where}: a line needs a positive 'length', got {d.get('length')!r}")
+            raise FigureFormatError(f"{where}: a line needs a positive 'length', got {_show(d.get('length'))}")
         return Segment(0.0, length)
     if kind != "arc":
-        raise FigureFormatError(f"{where}: piece type must be 'arc', 'line' or 'spiral', got {kind!r}")
+        raise FigureFormatError(f"{where}: piece type must be 'arc', 'line' or 'spiral', got {_show(kind)}")
     if "curvature" in d:
         k = _number(d, "curvature", where)
         if k == 0.0:
@@ -353,7 +444,7 @@ def _segment_from_dict(d: Any, where: str) -> Segment | Spiral:
             raise FigureFormatError(f"{where}: an arc needs 'radius' (or 'curvature')")
         r = _number(d, "radius", where)
         if r <= 0:
-            raise FigureFormatError(f"{where}: radius must be positive, got {r!r}; turn right with a negative sweep")
+            raise FigureFormatError(f"{where}: radius must be positive, got {_show(r)}; turn right with a negative sweep")
         if "sweep_deg" in d:
             sweep = math.radians(_number(d, "sweep_deg", where))
             if sweep == 0.0:
@@ -363,26 +454,26 @@ def _segment_from_dict(d: Any, where: str) -> Segment | Spiral:
             length = _number(d, "length", where)
             turn = d.get("turn", "left")
             if turn not in ("left", "right"):
-                raise FigureFormatError(f"{where}: turn must be 'left' or 'right', got {turn!r}")
+                raise FigureFormatError(f"{where}: turn must be 'left' or 'right', got {_show(turn)}")
             k = 1.0 / r if turn == "left" else -1.0 / r
         else:
             raise FigureFormatError(f"{where}: an arc needs 'sweep_deg' or 'length'")
     if not length > 0:
-        raise FigureFormatError(f"{where}: length must be positive, got {length!r}")
+        raise FigureFormatError(f"{where}: length must be positive, got {_show(length)}")
     return Segment(k, length)
 
 
 def _join_from_dict(d: Any, where: str) -> Join:
     if not isinstance(d, dict) or d.get("type") not in ("smooth", "cusp"):
-        raise FigureFormatError(f"{where}: a join is {{'type': 'smooth'}} or {{'type': 'cusp', ...}}, got {d!r}")
+        raise FigureFormatError(f"{where}: a join is {{'type': 'smooth'}} or {{'type': 'cusp', ...}}, got {_show(d)}")
     if d["type"] == "smooth":
         if set(d) - {"type"}:
-            raise FigureFormatError(f"{where}: a smooth join cannot pivot or reverse; use a cusp, got {d!r}")
+            raise FigureFormatError(f"{where}: a smooth join cannot pivot or reverse; use a cusp, got {_show(d)}")
         return SMOOTH
     pivot = math.radians(_number(d, "pivot_deg", where)) if "pivot_deg" in d else 0.0
     reverse = d.get("reverse", False)
     if not isinstance(reverse, bool):
-        raise FigureFormatError(f"{where}: reverse must be true or false, got {reverse!r}")
+        raise FigureFormatError(f"{where}: reverse must be true or false, got {_show(reverse)}")
     return Join("cusp", pivot, reverse)
 
 
@@ -392,7 +483,7 @@ def figure_from_dict(data: Any) -> Figure:
         raise FigureFormatError(f"a figure is a JSON object, got {type(data).__name__}")
     schema = data.get("schema", SCHEMA)
     if schema != SCHEMA:
-        raise FigureFormatError(f"unsupported figure schema {schema!r}; expected {SCHEMA!r}")
+        raise FigureFormatError(f"unsupported figure schema {_show(schema)}; expected {SCHEMA!r}")
     curves_in = data.get("curves")
     if not isinstance(curves_in, list) or not curves_in:
         raise FigureFormatError("a figure needs a non-empty list 'curves'")
@@ -400,27 +491,35 @@ def figure_from_dict(data: Any) -> Figure:
     if "params" in data:
         p = data["params"]
         if not isinstance(p, dict) or set(p) - {"M", "m", "I"}:
-            raise FigureFormatError(f"'params' must be an object with keys M, m, I; got {p!r}")
+            raise FigureFormatError(f"'params' must be an object with keys M, m, I; got {_show(p)}")
         try:
             params = SleighParams(**p)
         except (TypeError, ValueError) as exc:
             raise FigureFormatError(f"'params': {exc}") from None
-    curves = []
+    curves, total = [], 0
     for ci, c in enumerate(curves_in):
         where = f"curves[{ci}]"
         if not isinstance(c, dict):
-            raise FigureFormatError(f"{where}: expected an object, got {c!r}")
+            raise FigureFormatError(f"{where}: expected an object, got {_show(c)}")
         pieces_in = c.get("pieces")
         if not isinstance(pieces_in, list) or not pieces_in:
             raise FigureFormatError(f"{where}: needs a non-empty list 'pieces'")
+        repeat = c.get("repeat", 1)
+        if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+            raise FigureFormatError(f"{where}: repeat must be a whole number >= 1, got {_show(repeat)}")
+        # the size limit is checked before any piece is read, so a huge list costs no time
+        total += len(pieces_in) * repeat
+        if total > MAX_PIECES:
+            raise FigureFormatError(f"{where}: {_count_pieces(len(pieces_in), repeat)}, {total} in the figure so "
+                                    f"far; at most {MAX_PIECES} pieces are allowed in a figure")
         pieces = tuple(_segment_from_dict(p, f"{where}.pieces[{i}]") for i, p in enumerate(pieces_in))
         joins_in = c.get("joins", [{"type": "cusp"}] * (len(pieces) - 1))
         if not isinstance(joins_in, list):
             raise FigureFormatError(f"{where}: 'joins' must be a list")
+        if len(joins_in) != len(pieces) - 1:
+            raise FigureFormatError(f"{where}: {len(pieces)} pieces need {len(pieces) - 1} joins, "
+                                    f"got {len(joins_in)}")
         joins = tuple(_join_from_dict(j, f"{where}.joins[{i}]") for i, j in enumerate(joins_in))
-        repeat = c.get("repeat", 1)
-        if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
-            raise FigureFormatError(f"{where}: repeat must be a whole number >= 1, got {repeat!r}")
         closing = _join_from_dict(c["closing_join"], f"{where}.closing_join") if "closing_join" in c else None
         if repeat > 1 and closing is None:
             closing = Join("cusp")
@@ -451,8 +550,12 @@ def load_figure(path: str | Path) -> Figure:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise FigureFormatError(f"cannot read figure file {str(path)!r}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise FigureFormatError(f"{path}: not a text file in UTF-8 (byte {exc.start}); a figure is JSON text") from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise FigureFormatError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    except RecursionError:
+        raise FigureFormatError(f"{path}: JSON nested too deeply to be a figure") from None
     return figure_from_dict(data)
