@@ -16,6 +16,7 @@ _EXPORTS = {
     "deviation": ("DeviationCost", "deviation_cost", "segments_target"),
     "errors": ("DrawingError", "FigureFormatError", "FitError", "InfeasibleArcError", "SkatetraceError"),
     "exact": ("ExactDrawingFit", "ExactPathFit", "figure_from_exact", "fit_exact_drawing", "fit_exact_path"),
+    "feasibility": ("Feasibility", "HumanLimits", "assess_feasibility"),
     "figure": ("Curve", "Figure", "Join", "figure_from_dict", "load_figure"),
     "fitting": ("DrawingFit", "PathFit", "figure_from_fit", "fit_drawing", "fit_path"),
     "geometry": ("Pose", "Segment", "Spiral"),

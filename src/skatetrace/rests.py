@@ -18,12 +18,13 @@ figure as given, ``rests="joins"`` rests at every smooth join.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Iterable
 
 import numpy as np
 
 from .controls import ControlSchedule
+from .feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .figure import Figure, Section
 from .model import SleighParams
 from .tracing import FigureTrace, TraceOptions, trace_figure
@@ -40,7 +41,9 @@ class VerifiedTrace:
 
     ``figure`` is the figure as traced: the input with the rests of ``rests`` added, as
     ``(curve index, piece index)`` of the piece after each rest. ``rounds`` counts the
-    trace-and-verify passes.
+    trace-and-verify passes. ``feasibility`` is the second verdict: could a skater make these
+    controls (:mod:`skatetrace.feasibility`)?  ``success`` is the first one only: traced and
+    verified, exact for the model.
     """
 
     figure: Figure
@@ -50,6 +53,7 @@ class VerifiedTrace:
     report: VerificationReport
     rests: tuple[tuple[int, int], ...]
     rounds: int
+    feasibility: Feasibility | None = None
 
     @property
     def success(self) -> bool:
@@ -65,6 +69,14 @@ class VerifiedTrace:
         if self.success:
             return f"traced and verified{rests}"
         return (self.trace.message if not self.trace.success else self.report.message) + rests
+
+    @property
+    def verdict(self) -> str:
+        """Both verdicts in a line: ``verified · not humanly feasible: mass 32.6 m from the blade (...)``."""
+        verified = self.report.success and self.trace.success
+        if self.feasibility is None:
+            return "verified" if verified else "verification failed"
+        return self.feasibility.verdict(verified)
 
 
 def middle_join(section: Section) -> int | None:
@@ -100,7 +112,7 @@ def _all_smooth_joins(figure: Figure) -> list[tuple[int, int]]:
 
 def trace_and_verify(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
                      *, rests: str = "auto", rel_tol: float = 1e-6, max_rounds: int = 8,
-                     progress=None) -> VerifiedTrace:
+                     limits: HumanLimits | None = None, progress=None) -> VerifiedTrace:
     """Trace ``figure``, replay its controls through the full dynamics, and add rests if needed.
 
     Parameters
@@ -111,13 +123,19 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         ``"never"`` traces the figure as given; ``"joins"`` rests at every smooth join.
     rel_tol : float
         Verification tolerance as a fraction of the figure's size (:func:`~skatetrace.verify.verify`).
+    limits : HumanLimits, optional
+        What a skater can do, in the figure's units, for the feasibility verdict. Default:
+        :meth:`HumanLimits.for_model` (model units at the scale of the paper's figure); give
+        :meth:`HumanLimits.for_skater` for a figure in metres.
     progress : callable, optional
         Passed to :func:`~skatetrace.tracing.trace_figure`.
 
     Returns
     -------
     VerifiedTrace
-        Never raises for a failed trace or verification: see its ``success`` and ``message``.
+        Never raises for a failed trace or verification: see its ``success`` and ``message``,
+        and its ``feasibility``. The sections' peak metrics (``max_abs_a``, ``peak_abs_adot``, ...)
+        are those of the exported rows where these reach further than the tracer's own grid.
     """
     if rests not in REST_POLICIES:
         raise ValueError(f"rests must be one of {', '.join(REST_POLICIES)}, got {rests!r}")
@@ -135,7 +153,7 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         result = VerifiedTrace(figure=current, trace=trace, schedule=schedule, states=states, report=report,
                                rests=tuple(added), rounds=rounds)
         if result.success or rests != "auto" or rounds > max_rounds:
-            return result
+            return _finish(result, limits)
         # The replay carries each section's end state into the next, so a section may fail for an
         # error made before it: every section of the curve up to its last failing one is split.
         last_bad: dict[int, int] = {}
@@ -149,6 +167,26 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
                 if piece is not None:
                     new.append((sec.curve_index, piece))
         if not new:
-            return result
+            return _finish(result, limits)
         added += new
         current = add_rests(figure, added)
+
+
+_PEAKS = ("max_abs_a", "max_abs_b", "peak_abs_adot", "peak_abs_bdot", "peak_mass_kinetic_energy")
+
+
+def _finish(result: VerifiedTrace, limits: HumanLimits | None) -> VerifiedTrace:
+    """Refresh the sections' peaks from the exported rows, and add the feasibility verdict.
+
+    The tracer's metrics come from a uniform grid, which can miss a narrow spike of the rates
+    (where the mass passes near the singular point); the exported rows resolve it.
+    """
+    trace = result.trace
+    peaks = exported_peaks(result.schedule, result.states, trace.params, len(trace.sections))
+    sections = tuple(replace(sec, metrics={**sec.metrics, **{k: max(sec.metrics.get(k, 0.0), p[k]) for k in _PEAKS}})
+                     if p else sec for sec, p in zip(trace.sections, peaks))
+    trace = replace(trace, sections=sections)
+    if limits is None:
+        limits = HumanLimits.for_model(params=trace.params)
+    feasibility = assess_feasibility(trace, result.schedule, result.states, limits)
+    return replace(result, trace=trace, feasibility=feasibility)
