@@ -55,7 +55,8 @@ class Playback:
     rest_times : ndarray, shape (r,)
     summary : dict
         Figure name, trace status and message, duration, and the verification checks
-        (``report.json``'s status, message, deviation, tolerance, cusp speed) if present.
+        (``report.json``'s status, message, deviation, tolerance, cusp speed) if present, and
+        ``feasibility`` and ``verdict`` (the second verdict: could a skater do it) where the report has them.
     """
 
     name: str
@@ -158,6 +159,9 @@ def load_playback(source: str | Path) -> Playback:
         rep = _read_json(report_path, "the verification report")
         summary["verification"] = {k: rep.get(k) for k in ("status", "message", "max_deviation", "tolerance",
                                                             "figure_size", "max_cusp_speed")}
+        if isinstance(rep.get("feasibility"), dict):
+            summary["feasibility"] = rep["feasibility"]
+            summary["verdict"] = rep.get("verdict")
     unit = summary["unit"]
     return Playback(
         name=result["figure"].name, unit=unit, params=params, t=t, x=x, y=y, theta=th, a=a, b=b, adot=ad, bdot=bd,

@@ -244,6 +244,28 @@ def _checks(summary: dict[str, Any], units: dict[str, str]) -> list[dict[str, An
                  "limit": "≤ 1e-8 × the section's fastest motion", "passed": cusp_ok})
     rows.append({"name": "verification", "value": status, "limit": message,
                  "passed": status == "passed" if status in ("passed", "failed") else None})
+    return rows + _feasibility_rows(summary.get("feasibility"))
+
+
+def _feasibility_rows(feas: Any) -> list[dict[str, Any]]:
+    """The feasibility checks (could a skater do it?) as rows of the checks table."""
+    if not isinstance(feas, dict):
+        return [{"name": "humanly feasible", "value": "not assessed", "limit": "no feasibility in report.json",
+                 "passed": None, "kind": "feasibility"}]
+    rows = []
+    for c in feas.get("checks") or []:
+        if not isinstance(c, dict):
+            continue
+        unit = f" {c['unit']}" if c.get("unit") else ""
+        sign = "≥" if c.get("name") == "singular_approach" else "≤"
+        where = "" if c.get("section") is None else f" (worst in section {c['section']}, t = {_number(c.get('time'))})"
+        title = str(c.get("title") or str(c.get("name", "")).replace("_", " "))
+        rows.append({"name": f"feasible: {title}", "value": _number(c.get("value"), ".3g") + unit,
+                     "limit": f"{sign} {_number(c.get('limit'), '.3g')}{unit}{where}",
+                     "passed": None if c.get("passed") is None else bool(c["passed"]), "kind": "feasibility"})
+    rows.append({"name": "humanly feasible", "value": str(feas.get("status", "–")),
+                 "limit": str((feas.get("limits") or {}).get("assumptions", "")),
+                 "passed": None if feas.get("feasible") is None else bool(feas["feasible"]), "kind": "feasibility"})
     return rows
 
 
@@ -271,7 +293,10 @@ def _tables_html(playback: Playback, units: dict[str, str]) -> tuple[str, str]:
                         for k, v in _summary_rows(playback, units))
     rows = []
     for c in _checks(playback.summary, units):
-        state = {True: ("pass", "✔ passed"), False: ("fail", "✘ FAILED"), None: ("unknown", "–")}[c["passed"]]
+        if c.get("kind") == "feasibility":  # a second verdict, not a failure of the controls
+            state = {True: ("pass", "✔ within"), False: ("warn", "⚠ beyond"), None: ("unknown", "–")}[c["passed"]]
+        else:
+            state = {True: ("pass", "✔ passed"), False: ("fail", "✘ FAILED"), None: ("unknown", "–")}[c["passed"]]
         rows.append(f'<tr class="check {state[0]}"><th scope="row">{e(c["name"])}</th><td>{e(c["value"])}</td>'
                     f'<td>{e(c["limit"])}</td><td class="result">{e(state[1])}</td></tr>')
     return summary, "\n".join(rows)
@@ -281,7 +306,12 @@ def _overall(summary: dict[str, Any]) -> tuple[str, str]:
     """CSS class and text of the status badge next to the title."""
     ver = summary.get("verification")
     if isinstance(ver, dict) and ver.get("status") in ("passed", "failed"):
-        return ("pass", "verified") if ver["status"] == "passed" else ("fail", "verification failed")
+        feas = summary.get("feasibility")
+        verdict = summary.get("verdict")
+        if ver["status"] == "passed" and isinstance(feas, dict) and isinstance(verdict, str):
+            # Both verdicts: exact for the model, and whether a skater could do it.
+            return ("pass", verdict) if feas.get("feasible") else ("warn", verdict)
+        return ("pass", "verified") if ver["status"] == "passed" else ("fail", verdict or "verification failed")
     if summary.get("success") is False:
         return "fail", str(summary.get("status", "failed"))
     return "unknown", "not verified"
