@@ -16,6 +16,7 @@ from skatetrace.model import SleighParams, mass_energy  # noqa: E402
 from skatetrace.paper import evaluate_exact_arc, evaluate_paper_arc, paper_row  # noqa: E402
 from skatetrace.paper import figures  # noqa: E402
 from skatetrace.patterns import pattern  # noqa: E402
+from test_plotting import axes_without_units, legend_overlaps  # noqa: E402  (tests/ is on sys.path)
 
 GREEN, BLUE, RED, BLACK = (to_rgba(c) for c in ("tab:green", "tab:blue", "red", "black"))
 
@@ -253,6 +254,7 @@ def test_figures_survive_nonfinite_and_empty_series(evs):
             figures.plot_endpoints([bad[1], (r2, empty)]), figures.plot_endpoints([])]
     for fig in figs:
         assert isinstance(fig, Figure) and len(_render(fig)) > 1000
+        assert axes_without_units(fig) == []  # "no data" panels are labelled too
     assert any("no data" in t.get_text() for t in figs[1].axes[0].texts)
     # the damaged samples are masked, the rest is drawn
     traj = figs[0].axes[0]
@@ -260,3 +262,41 @@ def test_figures_survive_nonfinite_and_empty_series(evs):
     assert np.isnan(drawn).sum() >= 3 and not np.isinf(drawn).any() and np.isfinite(drawn).sum() > 1000
     # the leaf still switches twice in each time panel, even around an empty arc
     assert all(len(_vertical_red(ax)) == 2 for ax in figs[7].axes[1:])
+
+
+def _legend_texts(fig):
+    return [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+
+
+def test_every_paper_figure_names_its_units_and_keeps_its_legend_off_the_data(evs):
+    main = [evs["main", k] for k in (1, 2, 3)]
+    point = [evs["point", k] for k in (1, 2, 3)]
+    exact = {k: evs["exact", k] for k in (1, 2, 3)}
+    figs = {
+        "arc": figures.plot_arc(*evs["main", 1]), "arc point": figures.plot_arc(*evs["point", 3]),
+        "arc exact": figures.plot_arc(*evs["exact", 2]), "mass": figures.plot_arc_mass(*evs["main", 3]),
+        "energies": figures.plot_energies(main), "energies log": figures.plot_energies(point),
+        "energies none": figures.plot_energies([]), "leaf": figures.plot_leaf([main[2], main[1], main[2]]),
+        "pattern": figures.plot_pattern(exact), "endpoints": figures.plot_endpoints(point),
+        "endpoints none": figures.plot_endpoints([]),
+    }
+    for name, fig in figs.items():
+        assert axes_without_units(fig) == [], name
+        for ax in fig.axes:  # the paper's dimensionless units, by name
+            assert ax.get_xlabel().endswith(("(model length)", "(model time)")), (name, ax.get_xlabel())
+            assert ax.get_ylabel().endswith(("(model length)", "(model length/time)", "(model energy)")), name
+        assert all(ax.get_legend() is None for ax in fig.axes), name  # one legend per figure, below the axes
+        if "none" not in name:
+            assert len(fig.legends) == 1 and len(_legend_texts(fig)) >= 2, name
+    assert figs["energies log"].axes[0].get_yscale() == "log"
+    # rendering is the slow part: one figure of each layout
+    for name in ("arc point", "mass", "energies log", "leaf", "pattern", "endpoints"):
+        assert legend_overlaps(figs[name]) == [], name
+    assert {"backward in time", "forward in time", "full dynamics", "target point", "target circle"} <= set(
+        _legend_texts(figs["arc point"]))
+    assert "exact engine" in _legend_texts(figs["arc exact"])
+    assert {"contact point of the blade", "start of the control mass", "skate (solid)",
+            "control mass (dashed)"} <= set(_legend_texts(figs["mass"]))
+    assert _legend_texts(figs["leaf"])[:3] == ["first: arc 3", "second: arc 2", "third: arc 3"]
+    assert "controls switch to the next arc" in _legend_texts(figs["leaf"])
+    assert "target figure" in _legend_texts(figs["pattern"])

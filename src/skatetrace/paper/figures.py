@@ -17,7 +17,9 @@ Rhodes & Putkaradze, "Trajectory tracing in figure skating" (``shared/reference`
 Conventions: in a paper arc's series ``t < 0`` is the backward-in-time part (blue) and ``t >= 0`` the
 forward part (green); the exact engine's series (``label == "exact"``) runs from ``0`` with no split
 and is drawn in one colour (``C0``). Non-finite samples (the appendix arcs pass through the
-singular set ``a = 0`` of (b_diff_eq)) are masked, never plotted, and never raise.
+singular set ``a = 0`` of (b_diff_eq)) are masked, never plotted, and never raise. Every axis
+names its quantity and unit: the paper's dimensionless model units (``model length``, ``model
+time``, ...; :func:`skatetrace.plotting.axis_units`).
 
 Figures are built with the object API (:class:`matplotlib.figure.Figure`), so nothing is registered
 with pyplot and nothing needs closing; matplotlib is imported inside the functions only.
@@ -33,6 +35,7 @@ import numpy as np
 
 from ..geometry import Pose, segment_points
 from ..model import SleighParams, mass_energy, skate_energy
+from ..plotting import axis_units
 from .tables import METHODS
 
 __all__ = ["plot_arc", "plot_arc_mass", "plot_energies", "plot_leaf", "plot_pattern", "plot_endpoints",
@@ -47,7 +50,16 @@ _LOG_SPAN = 1e4  # four decades
 _DPI = 110
 #: Which of the paper's arcs each piece of the double flower's curves is (inner, outer).
 _INNER_ARCS = (1,)
+_ORDINALS = ("first", "second", "third")
 _OUTER_ARCS = (3, 2, 3)
+#: The paper's dimensionless units, named on every axis as in :mod:`skatetrace.plotting`.
+_U = axis_units("model")
+_X = f"x ({_U['length']})"
+_Y = f"y ({_U['length']})"
+_T = f"t ({_U['time']})"
+_XI2 = rf"$\xi^2$, blade speed ({_U['speed']})"
+_A = f"a ({_U['length']})"
+_B = f"b ({_U['length']})"
 
 
 # --------------------------------------------------------------------------------------- helpers
@@ -125,6 +137,35 @@ def _no_data(ax, ev=None) -> None:
     notes = "; ".join(getattr(ev, "notes", ()) or ())
     text = "no data" + (f"\n{notes[:120]}" if notes else "")
     ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", fontsize=8, color="0.4", wrap=True)
+
+
+def _figure_legend(fig, axes, extra=()):
+    """One legend for the whole figure, below its axes (outside them, so it never covers data).
+
+    The entries are the labelled artists of ``axes`` (first of each label) and the ``extra``
+    proxy artists; nothing is drawn when there is no entry.
+    """
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    entries: dict[str, object] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(label, handle)
+    for handle in extra:
+        entries.setdefault(handle.get_label(), handle)
+    if not entries:
+        return None
+    if not isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine):
+        fig.set_layout_engine("constrained")  # "outside" placement needs it
+    return fig.legend(list(entries.values()), list(entries), loc="outside lower center",
+                      ncols=min(len(entries), 4), fontsize=8, frameon=False)
+
+
+def _proxy(label: str, **style):
+    """A legend entry for something drawn without a label of its own."""
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], label=label, **style)
 
 
 def _circle(ax, row) -> None:
@@ -252,12 +293,12 @@ def plot_arc(row, ev, fig=None):
         ax_xy.plot(fx, fy, "--", color="red", lw=1.0, label="full dynamics")
     _target_point(ax_xy, row)
     ax_xy.set_aspect("equal", adjustable="datalim")
-    ax_xy.set(xlabel="x", ylabel="y", title=f"arc {row.arc} trajectory")
-    ax_xy.legend(fontsize=7, loc="best")
+    ax_xy.set(xlabel=_X, ylabel=_Y, title=f"arc {row.arc} trajectory")
+    _figure_legend(fig, [ax_xy])
     ax_v.axhline(0.0, color="0.8", lw=0.6)
-    ax_v.set(xlabel="t", ylabel=r"$\xi^2$", title=r"$\xi^2$ profile")
-    ax_a.set(xlabel="t", ylabel="a(t)", title="a(t)")
-    ax_b.set(xlabel="t", ylabel="b(t)", title="b(t)")
+    ax_v.set(xlabel=_T, ylabel=_XI2, title=r"$\xi^2$ profile")
+    ax_a.set(xlabel=_T, ylabel=_A, title="a(t)")
+    ax_b.set(xlabel=_T, ylabel=_B, title="b(t)")
     fig.suptitle(f"{row.method} method, arc {row.arc}: {getattr(ev, 'label', '')}")
     return fig
 
@@ -296,17 +337,20 @@ def plot_arc_mass(row, ev, fig=None):
         _plot_split(ax_o, t, mx, my, exact, lw=1.0, ls="--")
         ok = np.flatnonzero(np.isfinite(mx) & np.isfinite(my))
         if ok.size:
-            ax_o.plot([mx[ok[0]]], [my[ok[0]]], "*", color="black", ms=13, zorder=5)
-        ax_s.legend(fontsize=7, loc="best")
+            ax_o.plot([mx[ok[0]]], [my[ok[0]]], "*", color="black", ms=13, zorder=5,
+                      label="start of the control mass")
     else:
         for ax in (ax_s, ax_m, ax_o):
             _no_data(ax, ev)
-    ax_m.plot([0.0], [0.0], "k+", ms=9)
+    ax_m.plot([0.0], [0.0], "k+", ms=9, label="contact point of the blade")
     for ax in (ax_s, ax_m, ax_o):
         ax.set_aspect("equal", adjustable="datalim")
-    ax_s.set(xlabel="x", ylabel="y", title="skate trajectory")
-    ax_m.set(xlabel="a (along the blade)", ylabel="b (left of the blade)", title="control mass, body frame")
-    ax_o.set(xlabel="x", ylabel="y", title="skate, control mass (dashed), * start")
+    ax_s.set(xlabel=_X, ylabel=_Y, title="skate trajectory")
+    ax_m.set(xlabel=f"a, along the blade ({_U['length']})", ylabel=f"b, left of the blade ({_U['length']})",
+             title="control mass, body frame")
+    ax_o.set(xlabel=_X, ylabel=_Y, title="skate, control mass (dashed), * start")
+    _figure_legend(fig, [ax_s, ax_m, ax_o], extra=(_proxy("skate (solid)", color="0.3", ls="-"),
+                                                   _proxy("control mass (dashed)", color="0.3", ls="--")))
     fig.suptitle(f"{row.method} method, arc {row.arc}: {getattr(ev, 'label', '')}")
     return fig
 
@@ -336,23 +380,25 @@ def plot_energies(pairs, fig=None, params: SleighParams = SleighParams()):
     fig = _new_figure(fig, (10.0, 2.8 * n + 0.6))
     axes = np.atleast_2d(fig.subplots(n, 2, squeeze=False))
     if not pairs:
-        for ax in axes.ravel():
+        for ax, who in zip(axes.ravel(), ("m", "{skate}")):
             _no_data(ax)
+            ax.set(xlabel=_T, ylabel=rf"$KE_{who}$ ({_U['energy']})")
     for (row, ev), (ax_m, ax_s) in zip(pairs, axes):
         t, km, ks = _energies(ev, params)
         if t.size:
-            _plot_split(ax_m, t, t, km, _is_exact(ev), lw=1.5)
+            _plot_split(ax_m, t, t, km, _is_exact(ev), labels=True, lw=1.5)
             _plot_split(ax_s, t, t, ks, _is_exact(ev), lw=1.5)
             _auto_log(ax_m, km)
             _auto_log(ax_s, ks)
         else:
             _no_data(ax_m, ev)
             _no_data(ax_s, ev)
-        ax_m.set(xlabel="t", ylabel=r"$KE_m$", title=f"arc {row.arc}: control mass")
-        ax_s.set(xlabel="t", ylabel=r"$KE_{skate}$", title=f"arc {row.arc}: skate")
+        ax_m.set(xlabel=_T, ylabel=rf"$KE_m$ ({_U['energy']})", title=f"arc {row.arc}: control mass")
+        ax_s.set(xlabel=_T, ylabel=rf"$KE_{{skate}}$ ({_U['energy']})", title=f"arc {row.arc}: skate")
     if pairs:
         row, ev = pairs[0]
         fig.suptitle(f"{row.method} method: kinetic energies ({getattr(ev, 'label', '')})")
+    _figure_legend(fig, axes.ravel())
     return fig
 
 
@@ -391,7 +437,7 @@ def plot_leaf(pairs, fig=None):
         s = _series(ev)
         X, Y = _placed_path(ev, placed[i].start) if i < len(placed) else (np.empty(0), np.empty(0))
         if X.size:
-            ax_xy.plot(X, Y, color=colour, lw=1.8, label=f"arc {row.arc}", gid="path")
+            ax_xy.plot(X, Y, color=colour, lw=1.8, label=f"{_ORDINALS[i % 3]}: arc {row.arc}", gid="path")
         t = _get(s, "t")
         tf = t[np.isfinite(t)]
         if not tf.size:
@@ -405,13 +451,13 @@ def plot_leaf(pairs, fig=None):
         for ts in switches:
             ax.axvline(ts, color="red", lw=1.0, gid="switch")
     ax_xy.set_aspect("equal", adjustable="datalim")
-    ax_xy.set(xlabel="x", ylabel="y", title="single leaf")
-    if pairs:
-        ax_xy.legend(fontsize=7, loc="best")
+    ax_xy.set(xlabel=_X, ylabel=_Y, title="single leaf")
+    _figure_legend(fig, [ax_xy], extra=[_proxy("target leaf", **_TARGET_STYLE)]
+                   + ([_proxy("controls switch to the next arc", color="red", lw=1.0)] if switches else []))
     ax_v.axhline(0.0, color="0.8", lw=0.6)
-    ax_v.set(xlabel="t", ylabel=r"$\xi^2$", title=r"$\xi^2$ profile")
-    ax_a.set(xlabel="t", ylabel="a(t)", title="a(t)")
-    ax_b.set(xlabel="t", ylabel="b(t)", title="b(t)")
+    ax_v.set(xlabel=_T, ylabel=_XI2, title=r"$\xi^2$ profile")
+    ax_a.set(xlabel=_T, ylabel=_A, title="a(t)")
+    ax_b.set(xlabel=_T, ylabel=_B, title="b(t)")
     if pairs:
         row, ev = pairs[0]
         fig.suptitle(f"{row.method} method: leaf (arc 3, arc 2, arc 3), {getattr(ev, 'label', '')}")
@@ -453,7 +499,9 @@ def plot_pattern(pairs_by_arc, fig=None, title: str = "Full pattern reconstructi
             if X.size:
                 ax.plot(X, Y, color="black", lw=1.3, gid="path")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set(xlabel="x", ylabel="y", title=title)
+    ax.set(xlabel=_X, ylabel=_Y, title=title)
+    _figure_legend(fig, [ax], extra=[_proxy("target figure", **{**_TARGET_STYLE, "lw": 0.8}),
+                                     _proxy("the arcs, each moved onto its piece", color="black", lw=1.3)])
     return fig
 
 
@@ -484,21 +532,24 @@ def plot_endpoints(pairs, fig=None):
         axes = list(np.ravel(fig.subplots(1, n, squeeze=False)))
     else:
         axes = []
-        _no_data(fig.subplots())
+        empty = fig.subplots()
+        _no_data(empty)
+        empty.set(xlabel=_X, ylabel=_Y)
     for (row, ev), ax in zip(pairs, axes):
         s = _series(ev)
         t = _get(s, "t")
         _circle(ax, row)
         if t.size:
-            _plot_split(ax, t, _get(s, "x"), _get(s, "y"), _is_exact(ev), lw=1.8)
+            _plot_split(ax, t, _get(s, "x"), _get(s, "y"), _is_exact(ev), labels=True, lw=1.8)
         else:
             _no_data(ax, ev)
         _target_point(ax, row)
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set(xlabel="x", ylabel="y", title=f"arc {row.arc}")
+        ax.set(xlabel=_X, ylabel=_Y, title=f"arc {row.arc}")
     if pairs:
         row, ev = pairs[0]
         fig.suptitle(f"{row.method} method: arcs and optimal end points ({getattr(ev, 'label', '')})")
+    _figure_legend(fig, axes)
     return fig
 
 
