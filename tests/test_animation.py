@@ -146,6 +146,8 @@ def test_bad_paths_and_folders_are_clear_errors(playback, tmp_path):
         save_still(playback, tmp_path / "x.jpg")
     with pytest.raises(ValueError, match="time must be finite"):
         render_rgb(playback, float("inf"), SMALL)
+    with pytest.raises(ValueError, match=r"cannot write an animation .*must end in \.gif or \.mp4 .*\.png by save_still"):
+        animate(playback, tmp_path / "x.png", SMALL)
     # the animation's input is the playback: a missing folder fails while loading it
     with pytest.raises(SkatetraceError, match="result.json not found"):
         animate(load_playback(tmp_path / "nothing-here"), tmp_path / "x.gif", SMALL)
@@ -187,3 +189,17 @@ def test_progress_that_raises_stops_cleanly(playback, tmp_path):
     with pytest.raises(KeyboardInterrupt):
         animate(playback, tmp_path / "x.gif", SMALL, progress=stop)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("where", [-0.5, 1.5, 100.0])
+def test_a_time_outside_the_clock_is_refused_not_clamped(playback, tmp_path, where):
+    t0, t1 = float(playback.t[0]), float(playback.t[-1])
+    time = t0 + where * (t1 - t0)
+    with pytest.raises(ValueError, match=rf"outside the figure's clock: give a time from {t0:.6g} to {t1:.6g}"):
+        render_rgb(playback, time, SMALL)
+    with pytest.raises(ValueError, match="outside the figure's clock"):
+        save_still(playback, tmp_path / "x.png", time=time, options=SMALL)
+    assert list(tmp_path.iterdir()) == []
+    # the ends themselves are frames
+    assert render_rgb(playback, t1, SMALL).shape == (240, 320, 3)
+    assert render_rgb(playback, t0, SMALL).shape == (240, 320, 3)

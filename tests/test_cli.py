@@ -132,7 +132,7 @@ def test_animate_writes_gif_mp4_and_still_from_the_result_files(tmp_path, capsys
         assert im.size == (160, 120)
     capsys.readouterr()
     assert main(["animate", str(out), "-o", str(tmp_path / "a.avi")]) == 2
-    assert "must end in .gif or .mp4" in capsys.readouterr().err
+    assert "must end in .gif, .mp4 or .png (got '.avi')" in capsys.readouterr().err
     assert main(["animate", str(tmp_path / "nothing"), "-o", str(gif)]) == 2
     assert main(["animate", str(out), "-o", str(gif), "--size", "wide"]) == 2
 
@@ -166,3 +166,239 @@ def test_double_flower_gif_and_mp4_at_the_defaults(tmp_path, capsys):
     frames, seconds = imageio_ffmpeg.count_frames_and_secs(str(mp4))
     assert frames == 750 and abs(seconds - 30.0) < 0.1
     assert tuple(next(imageio_ffmpeg.read_frames(str(mp4)))["size"]) == (800, 800)
+
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Command-line and file conventions (issue 13): --version, output folders, file modes, strict JSON, --time
+
+import os
+import stat
+from pathlib import Path
+
+import pytest
+
+import skatetrace
+from skatetrace import cli
+from skatetrace.io import MANIFEST
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+PLOTS = {"figure.png", "controls.png", "speed.png", "mass_path.png", "energies.png"}
+
+
+def strict_loads(text):
+    """json.loads that rejects NaN, Infinity and -Infinity, as JSON parsers outside Python do."""
+    def reject(name):
+        raise ValueError(f"not strict JSON: {name}")
+    return json.loads(text, parse_constant=reject)
+
+
+def test_version_in_process_and_as_python_m(capsys):
+    assert main(["--version"]) == 0
+    out = capsys.readouterr().out.strip()
+    assert out.startswith("skatetrace ") and out.split()[1][0].isdigit()
+    proc = subprocess.run([sys.executable, "-m", "skatetrace", "--version"], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout.strip() == out
+    proc = subprocess.run([sys.executable, "-m", "skatetrace", "figures"], capture_output=True, text=True)
+    assert proc.returncode == 0 and "double-flower" in proc.stdout
+    proc = subprocess.run([sys.executable, "-m", "skatetrace", "trace"], capture_output=True, text=True)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+
+
+def test_version_falls_back_to_the_packages_own(monkeypatch):
+    import importlib.metadata as md
+
+    def missing(name):
+        raise md.PackageNotFoundError(name)
+
+    monkeypatch.setattr(md, "version", missing)
+    assert cli._version() == skatetrace.__version__
+
+
+def _no_work(monkeypatch):
+    """Make any tracing or fitting fail the test: the checks must come first."""
+    def forbidden(*args, **kwargs):
+        raise AssertionError("work started before the output folder was checked")
+
+    monkeypatch.setattr(cli, "_resolve", forbidden)
+    monkeypatch.setattr(cli, "_compile_once", forbidden)
+
+
+@pytest.mark.parametrize("command", [["trace", "circle"], ["fit", str(EXAMPLES / "points-eight.csv")],
+                                     ["reproduce", "--arcs", "1"]])
+@pytest.mark.parametrize("where, match", [
+    (lambda d: d / "taken", "taken is a file, not a folder"),
+    (lambda d: d / "taken" / "sub", "cannot create folder .*sub: .*taken is a file"),
+])
+def test_out_that_cannot_be_a_folder_exits_2_before_any_work(tmp_path, capsys, monkeypatch, command, where, match):
+    import re
+
+    _no_work(monkeypatch)
+    monkeypatch.setattr("skatetrace.paper.report.reproduce", lambda *a, **k: pytest.fail("work started"),
+                        raising=False)
+    (tmp_path / "taken").write_text("precious")
+    assert main([*command, "--out", str(where(tmp_path))]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("skatetrace: error: --out: ") and re.search(match, err) and "Traceback" not in err
+    assert (tmp_path / "taken").read_text() == "precious"  # nothing lost
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
+
+
+def test_out_without_write_permission_exits_2_before_any_work(tmp_path, capsys, monkeypatch):
+    import tempfile
+
+    _no_work(monkeypatch)
+
+    def denied(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "mkstemp", denied)
+    assert main(["trace", "circle", "--out", str(tmp_path / "new")]) == 2
+    assert "cannot write in folder" in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()  # the folder the check made is gone again
+
+
+def test_a_folder_made_for_a_run_that_fails_is_removed(tmp_path, capsys):
+    assert main(["trace", "no-such-figure", "--out", str(tmp_path / "a" / "b")]) == 2
+    assert not (tmp_path / "a").exists()
+
+
+def test_a_write_that_fails_is_an_error_not_a_traceback(tmp_path, capsys, monkeypatch):
+    import skatetrace.io
+
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(skatetrace.io, "write_results", full)
+    assert main(["trace", "circle", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 2
+    assert "skatetrace: error: [Errno 28] No space left on device" in capsys.readouterr().err
+
+
+def test_reused_folder_holds_one_runs_files_and_keeps_the_users(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["trace", "circle", "--out", str(out)]) == 0
+    assert PLOTS <= {p.name for p in out.iterdir()}
+    (out / "notes.txt").write_text("my notes")
+    capsys.readouterr()
+    assert main(["trace", "line", "--out", str(out), "--no-plots"]) == 0
+    text = capsys.readouterr().out
+    names = {p.name for p in out.iterdir()}
+    assert names == {"result.json", "controls.csv", "report.json", "viewer.html", "notes.txt", MANIFEST}
+    assert f"note: removed 5 file(s) an earlier run wrote to {out}/" in text
+    assert all(p in text for p in PLOTS)
+    assert (out / "notes.txt").read_text() == "my notes"
+    assert json.loads((out / "result.json").read_text())["figure"]["name"] == "line"
+    page = (out / "viewer.html").read_text(encoding="utf-8")
+    assert "<title>line " in page and "<title>circle" not in page
+    # --no-viewer: the old viewer would play another run, so it goes too
+    assert main(["trace", "line", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    assert not (out / "viewer.html").exists() and (out / "notes.txt").exists()
+
+
+def test_view_into_a_run_folder_belongs_to_that_run(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["trace", "line", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    assert main(["view", str(out)]) == 0
+    assert "viewer.html" in strict_loads((out / MANIFEST).read_text())["files"]
+    assert main(["trace", "circle", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    assert not (out / "viewer.html").exists()
+    assert main(["view", str(out), "-o", str(tmp_path / "v.txt")]) == 2
+    assert "must end in .html or .htm" in capsys.readouterr().err
+
+
+def test_fit_into_a_trace_folder_leaves_no_trace_files(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["trace", "line", "--out", str(out), "--no-plots"]) == 0
+    assert main(["fit", str(EXAMPLES / "points-eight.csv"), "--out", str(out), "--no-plots"]) == 0
+    assert {p.name for p in out.iterdir()} == {"fit.json", MANIFEST}
+
+
+@pytest.mark.parametrize("umask, mode", [(0o022, 0o644), (0o077, 0o600)])
+def test_every_file_gets_the_umasks_permissions(tmp_path, umask, mode):
+    out = tmp_path / "o"
+    old = os.umask(umask)
+    try:
+        assert main(["trace", "s-bend", "--out", str(out)]) == 0
+    finally:
+        os.umask(old)
+    files = [p for p in out.rglob("*") if p.is_file()]
+    assert len(files) >= 9
+    assert {p.name: oct(stat.S_IMODE(p.stat().st_mode)) for p in files} == {p.name: oct(mode) for p in files}
+
+
+def _viewer_data(page: str) -> str:
+    start = page.index('type="application/json"')
+    return page[page.index(">", start) + 1:page.index("</script>", start)]
+
+
+def test_every_json_file_is_strict(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["trace", "s-bend", "--out", str(out)]) == 0
+    for name in ("result.json", "report.json", MANIFEST):
+        strict_loads((out / name).read_text())
+    strict_loads(_viewer_data((out / "viewer.html").read_text(encoding="utf-8")))
+    fit = tmp_path / "fit"
+    assert main(["fit", str(EXAMPLES / "points-eight.csv"), "--out", str(fit), "--no-plots"]) == 0
+    strict_loads((fit / "fit.json").read_text())
+
+
+def test_fit_json_writes_nan_as_null(tmp_path, capsys, monkeypatch):
+    summary = cli._fit_summary
+
+    def with_nan(res):
+        data = summary(res)
+        data["hausdorff_sampled"] = float("nan")
+        data["paths"][0]["curve_length"] = float("inf")
+        return data
+
+    monkeypatch.setattr(cli, "_fit_summary", with_nan)
+    out = tmp_path / "fit"
+    assert main(["fit", str(EXAMPLES / "points-eight.csv"), "--out", str(out), "--no-plots"]) == 0
+    data = strict_loads((out / "fit.json").read_text())
+    assert data["hausdorff_sampled"] is None and data["paths"][0]["curve_length"] is None
+
+
+def test_animate_refuses_a_time_outside_the_figure_and_lists_suffixes(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["trace", "s-bend", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    duration = json.loads((out / "result.json").read_text())["duration"]
+    capsys.readouterr()
+    png = tmp_path / "still.png"
+    for t in ("9999", "-1", str(duration * 1.01)):
+        assert main(["animate", str(out), "-o", str(png), "--time", t, "--size", "64x64"]) == 2
+        err = capsys.readouterr().err
+        assert f"is outside the figure's time: give a time from 0 to {duration:.6g}" in err
+    assert not png.exists()
+    assert main(["animate", str(out), "-o", str(png), "--time", str(duration), "--size", "64x64"]) == 0
+    assert f"at t = {duration:.6g}" in capsys.readouterr().out
+    assert main(["animate", str(out), "-o", str(tmp_path / "a.gif"), "--time", "1"]) == 2
+    assert "use it with -o NAME.png" in capsys.readouterr().err
+    assert main(["animate", str(out), "-o", str(tmp_path / "x.avi")]) == 2
+    err = capsys.readouterr().err
+    assert all(s in err for s in (".gif", ".mp4", ".png")) and "'.avi'" in err
+    assert main(["animate", str(out), "-o", str(tmp_path / "run")]) == 2  # a folder, not a file name
+    assert main(["animate", str(out), "-o", str(tmp_path / "no" / "a.gif")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_first_run_says_it_compiles_once(tmp_path, capsys, monkeypatch):
+    import skatetrace.compiled as compiled
+
+    calls = []
+
+    def warm_up(progress=None):
+        for i, part in enumerate(("a", "b"), 1):
+            progress(part, i, 2)
+        calls.append(1)
+        return 21.0
+
+    monkeypatch.setattr(compiled, "cache_is_warm", lambda: False)
+    monkeypatch.setattr(compiled, "warm_up", warm_up)
+    assert main(["trace", "line", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("compiling the numerical core, once (about 20 s; later runs reuse it)") == 1
+    assert "compiling a (1/2)" in err and "compiling b (2/2)" in err and "compiled in 21 s" in err
+    assert calls == [1]
+    monkeypatch.setattr(compiled, "cache_is_warm", lambda: True)
+    assert main(["trace", "line", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 0
+    assert "compiling" not in capsys.readouterr().err and calls == [1]

@@ -37,3 +37,21 @@ def test_import_does_not_load_the_drawing_readers_solve_ivp_or_plotting():
             "print(' '.join(m for m in ('svgpathtools', 'scipy.interpolate', 'scipy.integrate', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == ""
+
+
+def test_version_is_the_distributions():
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        installed = version("skatetrace")
+    except PackageNotFoundError:
+        pytest.skip("not installed (a source checkout on sys.path)")
+    assert skatetrace.__version__ == installed
+
+
+def test_python_m_skatetrace_runs_the_command_line():
+    proc = subprocess.run([sys.executable, "-m", "skatetrace", "--version"], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout == f"skatetrace {skatetrace.__version__}\n"
+    proc = subprocess.run([sys.executable, "-m", "skatetrace", "animate", ".", "-o", "x.avi"], capture_output=True,
+                          text=True)
+    assert proc.returncode == 2 and proc.stderr.startswith("skatetrace: error: -o: ")

@@ -38,10 +38,12 @@ from .io import write_atomically
 from .playback import Playback
 
 __all__ = ["AnimationOptions", "AnimationResult", "animate", "render_frame", "render_rgb", "save_still",
-           "SUFFIXES", "MIN_SECONDS", "MAX_SECONDS"]
+           "SUFFIXES", "STILL_SUFFIXES", "MIN_SECONDS", "MAX_SECONDS"]
 
 #: File suffixes :func:`animate` writes, by writer.
 SUFFIXES = (".gif", ".mp4")
+#: File suffixes :func:`save_still` writes.
+STILL_SUFFIXES = (".png",)
 #: Default video length: the figure's own duration (real time) clamped to this range of seconds.
 MIN_SECONDS, MAX_SECONDS = 8.0, 30.0
 
@@ -371,15 +373,20 @@ class _Scene:
 
 
 def _check_time(pb: Playback, time) -> float:
+    """``time`` on the playback's clock, which must be within it (a frame is never drawn at another time)."""
+    t0, t1 = float(pb.t[0]), float(pb.t[-1])
     if time is None:
-        return float(pb.t[0] + 0.6 * pb.duration)
+        return t0 + 0.6 * (t1 - t0)
     try:
         time = float(time)
     except (TypeError, ValueError):
         raise ValueError(f"time must be a number, got {time!r}") from None
     if not math.isfinite(time):
         raise ValueError(f"time must be finite, got {time!r}")
-    return time
+    slack = 5e-6 * max(1.0, abs(t0), abs(t1))  # what printing the range to 6 digits may round
+    if not t0 - slack <= time <= t1 + slack:
+        raise ValueError(f"time {time:g} is outside the figure's clock: give a time from {t0:.6g} to {t1:.6g}")
+    return min(max(time, t0), t1)
 
 
 def render_frame(playback: Playback, time: float | None = None,
@@ -390,7 +397,7 @@ def render_frame(playback: Playback, time: float | None = None,
     ----------
     playback : Playback
     time : float or None
-        Time on the playback's clock (``playback.t``), clipped to its range; ``None``: 60% of the way
+        Time on the playback's clock (``playback.t``), within its range; ``None``: 60% of the way
         through.
     options : AnimationOptions
         Size, dpi and trail (the trail's length depends on the video's duration).
@@ -399,6 +406,11 @@ def render_frame(playback: Playback, time: float | None = None,
     -------
     matplotlib.figure.Figure
         With an Agg canvas: ``fig.savefig(...)`` works.
+
+    Raises
+    ------
+    ValueError
+        A time that is not a number or lies outside the playback's clock (the message gives its range).
     """
     scene = _Scene(playback, options, *options.size_px)
     scene.update(_check_time(playback, time))
@@ -498,7 +510,8 @@ def _target(path) -> tuple[Path, str]:
     suffix = path.suffix.lower()
     if suffix not in SUFFIXES:
         raise ValueError(f"cannot write an animation to {str(path)!r}: the file name must end in "
-                         f"{' or '.join(SUFFIXES)} (got {path.suffix or 'no suffix'!r})")
+                         f"{' or '.join(SUFFIXES)} (got {path.suffix or 'no suffix'!r}); one frame is written "
+                         f"as {' or '.join(STILL_SUFFIXES)} by save_still")
     if not path.parent.is_dir():
         raise SkatetraceError(f"cannot write {path}: folder {path.parent} does not exist")
     return path, suffix
@@ -583,8 +596,9 @@ def save_still(playback: Playback, path, time: float | None = None,
     Path
     """
     path = Path(path)
-    if path.suffix.lower() != ".png":
-        raise ValueError(f"a still is written as PNG: the file name must end in .png, got {str(path)!r}")
+    if path.suffix.lower() not in STILL_SUFFIXES:
+        raise ValueError(f"a still is written as PNG: the file name must end in .png, got {str(path)!r} (an "
+                         f"animation, {' or '.join(SUFFIXES)}, is written by animate)")
     if not path.parent.is_dir():
         raise SkatetraceError(f"cannot write {path}: folder {path.parent} does not exist")
     rgb = render_rgb(playback, time, options)

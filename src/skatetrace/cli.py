@@ -44,8 +44,21 @@ def _add_source_args(t) -> None:
     s.add_argument("--foot", default="right", help="right or left (default right)")
 
 
+def _version() -> str:
+    """The installed distribution's version, else the package's own (a source checkout on sys.path)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("skatetrace")
+    except PackageNotFoundError:
+        from . import __version__
+
+        return __version__
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="skatetrace", description="Controls that make a skater trace a figure exactly.")
+    p.add_argument("--version", action="version", version=f"skatetrace {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
     t = sub.add_parser("trace", help="trace a figure, verify it by re-simulation, write results")
     t.add_argument("figure", help=f"a built-in figure ({', '.join(pattern_names())}), school:NAME, a figure JSON "
@@ -133,14 +146,15 @@ def _fit_summary(res) -> dict:
 
 
 def _write_fit(res, out: Path, plots: bool) -> list[Path]:
-    from .io import atomic_write
+    from .io import atomic_write, dumps_json, write_atomically
 
     written = [out / "fit.json"]
-    atomic_write(out / "fit.json", json.dumps(_fit_summary(res), indent=2, default=float))
+    atomic_write(out / "fit.json", dumps_json(_fit_summary(res)))  # strict JSON: NaN written as null
     if plots:
         from .plotting import fit_figure
 
-        fit_figure(res.drawing, res.fit, exact=res.exact, unit=res.unit).savefig(out / "fit.png", dpi=110)
+        fig = fit_figure(res.drawing, res.fit, exact=res.exact, unit=res.unit)
+        write_atomically(out / "fit.png", lambda tmp: fig.savefig(tmp, format="png", dpi=110))  # whole or not at all
         written.append(out / "fit.png")
     return written
 
@@ -170,6 +184,18 @@ def _fit(args) -> int:
     return 0
 
 
+def _compile_once() -> None:
+    """Where numba's cache is cold (a first run): say so, and compile part by part, saying which."""
+    from .compiled import cache_is_warm, warm_up
+
+    if cache_is_warm() is not False:
+        return
+    print("skatetrace: compiling the numerical core, once (about 20 s; later runs reuse it)", file=sys.stderr,
+          flush=True)
+    seconds = warm_up(lambda part, i, n: print(f"  compiling {part} ({i}/{n})", file=sys.stderr, flush=True))
+    print(f"  compiled in {seconds:.0f} s", file=sys.stderr, flush=True)
+
+
 def _trace(args) -> int:
     from .io import write_results
     from .rests import trace_and_verify
@@ -184,6 +210,7 @@ def _trace(args) -> int:
     options = TraceOptions(speed=speed)
     for note in res.notes:
         print(f"note: {note}")
+    _compile_once()
 
     def progress(done, total):
         print(f"\rtracing sections {done}/{total}", end="", file=sys.stderr, flush=True)
@@ -275,17 +302,34 @@ def _progress_bar(label: str):
     return show
 
 
+def _still_time(args, pb) -> float:
+    """``--time`` (on the clock the frames show: 0 at the start) checked against the figure's duration."""
+    if args.time is None:
+        return 0.6 * pb.duration
+    unit = "s" if pb.unit == "m" else "time units"
+    if not (math.isfinite(args.time) and -5e-6 <= args.time <= pb.duration * (1 + 5e-6) + 5e-6):
+        raise SkatetraceError(f"--time {args.time:g} is outside the figure's time: give a time from 0 to "
+                              f"{pb.duration:.6g} {unit} (the figure's duration)")
+    return min(max(args.time, 0.0), pb.duration)
+
+
 def _animate(args) -> int:
-    from .animation import AnimationOptions, animate, save_still
+    from .animation import SUFFIXES, STILL_SUFFIXES, AnimationOptions, animate, save_still
+    from .io import check_output_file
     from .playback import load_playback
 
     t0 = time.perf_counter()
-    pb = load_playback(args.source)
-    options = AnimationOptions(fps=args.fps, duration=args.duration, size_px=_pixels(args.size))
     out = Path(args.output)
-    if out.suffix.lower() == ".png":
-        save_still(pb, out, args.time, options)
-        print(f"wrote a still of {pb.name} at t = {args.time if args.time is not None else 0.6 * pb.duration:.4g} "
+    check_output_file(out, label="-o", suffixes=SUFFIXES + STILL_SUFFIXES, create_parent=False)
+    if args.time is not None and out.suffix.lower() not in STILL_SUFFIXES:
+        raise SkatetraceError(f"--time picks the one frame of a still: use it with -o NAME.png (a "
+                              f"{out.suffix.lower()} plays the whole figure)")
+    options = AnimationOptions(fps=args.fps, duration=args.duration, size_px=_pixels(args.size))
+    pb = load_playback(args.source)
+    if out.suffix.lower() in STILL_SUFFIXES:
+        at = _still_time(args, pb)
+        save_still(pb, out, float(pb.t[0]) + at, options)
+        print(f"wrote a still of {pb.name} at t = {at:.6g} {'s' if pb.unit == 'm' else 'time units'} "
               f"to {out} in {time.perf_counter() - t0:.1f} s")
         return 0
     res = animate(pb, out, options, progress=_progress_bar("rendering frames"))
@@ -296,14 +340,20 @@ def _animate(args) -> int:
 
 
 def _view(args) -> int:
+    from .io import adopt, check_output_file
     from .playback import load_playback
     from .viewer import write_viewer
 
     t0 = time.perf_counter()
-    pb = load_playback(args.source)
     src = Path(args.source)
     target = Path(args.output) if args.output else (src.parent if src.suffix == ".json" else src) / "viewer.html"
+    if target.is_dir():
+        target = target / "viewer.html"
+    check_output_file(target, label="-o" if args.output else "view", suffixes=(".html", ".htm"))
+    pb = load_playback(args.source)
     path = write_viewer(pb, target)
+    if path.name == "viewer.html":
+        adopt(path)  # in a run's folder, the viewer is that run's: the next run there replaces or removes it
     print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB, self-contained: open it in any browser) "
           f"in {time.perf_counter() - t0:.1f} s")
     return 0
@@ -319,6 +369,7 @@ def _reproduce(args) -> int:
         raise SkatetraceError(f"--arcs must be comma-separated arc numbers 1, 2, 3, got {args.arcs!r}") from None
     if args.maxiter is not None and args.maxiter < 1:
         raise SkatetraceError(f"--maxiter must be a positive number of iterations, got {args.maxiter}")
+    _compile_once()
     t0 = time.perf_counter()
     rep = reproduce(methods, arcs, maxiter=args.maxiter,
                     progress=lambda msg: print(msg, file=sys.stderr, flush=True))
@@ -337,6 +388,41 @@ def _reproduce(args) -> int:
     return 0 if rep.success else 1
 
 
+def _figures(args) -> int:
+    from .school import school_names
+
+    for name in pattern_names():
+        print(f"{name:24s} {pattern(name).description}")
+    for name in school_names():
+        print(f"school:{name:17s} school figure sized for a skater (--height, --edge, --direction, --foot)")
+    return 0
+
+
+def _run(args) -> int:
+    commands = {"figures": _figures, "fit": _fit, "reproduce": _reproduce, "animate": _animate, "view": _view,
+                "trace": _trace}
+    return commands[args.command](args)
+
+
+def _output_folder(args):
+    """The ``--out`` folder of ``trace``, ``fit`` and ``reproduce``, checked (and created) before any work."""
+    from .io import OutputFolder
+
+    if args.command in ("trace", "fit"):
+        return OutputFolder(args.out, args.command)
+    if args.command == "reproduce":
+        return OutputFolder(args.out, args.command, subfolders=() if args.no_figures else ("figures",))
+    return None
+
+
+def _finish_folder(folder) -> None:
+    """Remove the files of an earlier run this one did not write, and say which."""
+    removed = folder.finish()
+    if removed:
+        print(f"note: removed {len(removed)} file(s) an earlier run wrote to {folder.path}/ and this one did not "
+              f"(so that the folder holds one run's results): {', '.join(removed)}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = _parser()
@@ -345,24 +431,18 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:
         return int(exc.code or 0)
     try:
-        if args.command == "figures":
-            from .school import school_names
-
-            for name in pattern_names():
-                print(f"{name:24s} {pattern(name).description}")
-            for name in school_names():
-                print(f"school:{name:17s} school figure sized for a skater (--height, --edge, --direction, --foot)")
-            return 0
-        if args.command == "fit":
-            return _fit(args)
-        if args.command == "reproduce":
-            return _reproduce(args)
-        if args.command == "animate":
-            return _animate(args)
-        if args.command == "view":
-            return _view(args)
-        return _trace(args)
-    except (SkatetraceError, ValueError, TypeError) as exc:
+        folder = _output_folder(args)  # checked before any work
+        if folder is None:
+            return _run(args)
+        try:
+            with folder:
+                code = _run(args)
+        except BaseException:
+            folder.discard()  # the folders the check created, if nothing was written into them
+            raise
+        _finish_folder(folder)
+        return code
+    except (SkatetraceError, ValueError, TypeError, OSError) as exc:
         print(f"skatetrace: error: {exc}", file=sys.stderr)
         return 2
 
