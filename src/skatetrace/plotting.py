@@ -1,7 +1,7 @@
 """Plots of a traced figure: the paper's kinds of figures, from a trace and its replay.
 
-Only this module (and the paper reproduction's figure module) imports matplotlib. Every function
-takes ``ax=None`` and returns the artists; nothing calls ``plt.show()``.
+matplotlib is imported inside the functions only (importing this module does not load it). Every
+plot function takes ``ax=None`` and returns the artists; nothing calls ``plt.show()``.
 
 Units on the axes. Every axis names its quantity and its unit in parentheses. A figure in metres
 (``unit="m"``, SI parameters) has lengths in m, times in s, speeds in m/s and energies in J; any
