@@ -191,10 +191,13 @@ def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
 
 
 def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,
-                  states: dict[str, np.ndarray], report: VerificationReport | None, unit: str = "model") -> list[Path]:
+                  states: dict[str, np.ndarray], report: VerificationReport | None, unit: str = "model",
+                  feasibility: "Feasibility | None" = None) -> list[Path]:
     """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``.
 
     ``unit`` (``"m"`` or ``"model"``) is recorded in ``result.json`` for the readers of the files.
+    ``feasibility`` (:class:`~skatetrace.feasibility.Feasibility`), the second verdict, goes into
+    ``report.json`` beside the verification, with both verdicts in one line under ``"verdict"``.
     """
     out = Path(out)
     written = []
@@ -203,8 +206,11 @@ def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule
     atomic_write(out / "controls.csv", _csv_text(schedule, states))
     written.append(out / "controls.csv")
     if report is not None:
-        atomic_write(out / "report.json", json.dumps(_clean({"schema": "skatetrace.report/1", **report.to_dict()}),
-                                                     indent=2, allow_nan=False))
+        data = {"schema": "skatetrace.report/1", **report.to_dict()}
+        if feasibility is not None:
+            data["verdict"] = feasibility.verdict(bool(report.success and trace.success))
+            data["feasibility"] = feasibility.to_dict()
+        atomic_write(out / "report.json", json.dumps(_clean(data), indent=2, allow_nan=False))
         written.append(out / "report.json")
     return written
 
