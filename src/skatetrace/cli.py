@@ -184,6 +184,31 @@ def _fit(args) -> int:
     return 0
 
 
+def _human_limits(args, res, params: SleighParams):
+    """The feasibility limits: the skater of ``--height``/``--body-mass`` in metres, else model units."""
+    from .feasibility import HumanLimits
+
+    if res.unit == "m":
+        return HumanLimits.for_skater(args.height, args.body_mass, moving_mass=params.m)
+    return None  # trace_and_verify then takes model units at the scale of the paper's figure
+
+
+def _print_feasibility(done) -> None:
+    """The second verdict, check by check, and a warning on stderr when a skater could not do it."""
+    f = done.feasibility
+    if f is None:
+        return
+    print(f"feasibility: {f.status} (limits for {f.limits.assumptions})")
+    for c in f.checks:
+        print(f"  {'ok' if c.passed else 'BEYOND':>6}  {c.phrase()}")
+    info = f.info
+    print(f"  peak force on the mass {info['peak_force_on_mass']:.3g} {info['force_unit']} (limit "
+          f"{info['force_limit']:.3g}), peak mass kinetic energy {info['peak_mass_kinetic_energy']:.3g} "
+          f"{info['energy_unit']}")
+    if not f.feasible:
+        print(f"skatetrace: warning: {done.verdict}", file=sys.stderr)
+
+
 def _compile_once() -> None:
     """Where numba's cache is cold (a first run): say so, and compile part by part, saying which."""
     from .compiled import cache_is_warm, warm_up
@@ -215,7 +240,9 @@ def _trace(args) -> int:
     def progress(done, total):
         print(f"\rtracing sections {done}/{total}", end="", file=sys.stderr, flush=True)
 
-    done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, progress=progress)
+    limits = _human_limits(args, res, params)
+    done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
+                            progress=progress)
     print(file=sys.stderr)
     figure, trace, schedule, states, report = done.figure, done.trace, done.schedule, done.states, done.report
     if done.rests:
@@ -224,7 +251,7 @@ def _trace(args) -> int:
         print(f"note: rests added at smooth joins ({where}): sections failed to trace or their replay strayed "
               f"more than allowed; {done.rounds} trace-and-verify rounds")
     out = Path(args.out)
-    write_results(out, trace, schedule, states, report, unit=res.unit)
+    write_results(out, trace, schedule, states, report, unit=res.unit, feasibility=done.feasibility)
     if res.fit is not None:
         _write_fit(res, out, not args.no_plots)
     if not args.no_plots:
@@ -274,7 +301,9 @@ def _trace(args) -> int:
             print(f"deviation from the drawing <= {bound:.3e} {unit} (certified fit {res.fit.hausdorff:.3e} + replay "
                   f"{report.max_deviation:.3e}); allowed {allowed:.3e} (fit tolerance + {args.verify_tol:g} x size)")
         ok = ok and bound <= allowed
+    _print_feasibility(done)
     print(f"verification: {report.status} ({report.message}); wrote {out}/ in {elapsed:.1f} s")
+    print(f"verdict: {done.verdict}")
     return 0 if ok else 1
 
 
