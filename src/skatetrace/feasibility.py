@@ -30,7 +30,7 @@ For a skater of height ``H`` and body mass ``W`` (SI units, :meth:`HumanLimits.f
   its length);
 - mass speed ``7 m/s`` relative to the body: about the fastest swing of a whole leg's centre of
   mass in sprinting or kicking (foot speeds of 15-25 m/s; Lees & Nolan 1998), averaged with arms
-  swung as in a jump (wrist speeds 6-8 m/s) over the moving segments;
+  swung as in a jump, over the moving segments;
 - force on the mass ``W g`` (one body weight; acceleration ``W g / m``, about 29 m/s² for the
   default skater): the body accelerates its own limbs through the shoulders and hips with forces
   of the order of its weight (peak ground reaction forces of jumps are 2-3 body weights for the
