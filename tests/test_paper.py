@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from skatetrace.model import SleighParams, curvature_coefficients, velocities
 from skatetrace.paper import (
@@ -13,6 +12,7 @@ from skatetrace.paper import (
     ReducedOptions, b_rate_printed, control_from_params, evaluate_exact_arc, evaluate_paper_arc,
     integrate_reduced, paper_cost, paper_row, paper_rows, run_procedure, singular_distances,
 )
+from skatetrace.paper.singular import approach_a_zero, crossing_exponent
 
 P = SleighParams()
 # Non-default parameters, so that a formula that silently assumes M=2, m=1, I=3 fails.
@@ -299,8 +299,9 @@ def test_singular_control_ends_a_half_as_data(method):
     arc = integrate_reduced(P, row.radius, row.initial, control_from_params("length", row.published), row.T, opts)
     statuses = [h.status for h in arc.halves()]
     assert set(statuses) <= {"stopped", "time", "failed", "budget"}
-    if method == "LSODA":
-        assert "failed" in statuses and "no progress" in arc.forward.message, statuses
+    # (whether a solver stops at a = 0 or steps across depends on round-off: only the form is asserted)
+    for h in arc.halves():
+        assert h.message and (h.status != "failed" or "integration failed" in h.message), h.message
     assert all(np.all(np.diff(h.t) * np.sign(h.t_end) > 0) for h in arc.halves())
 
 
@@ -377,58 +378,127 @@ def test_table2_optima_miss_their_target_lengths(row, published):
     assert ev.cost == pytest.approx(ev.length_error ** 2, rel=1e-12)
 
 
+# What happens at a = 0 after the arc gets there depends on step sizes and round-off (an integrator may
+# stop, step across, or pick one of many continuations; CPUs differ). The tests below assert only what
+# the approach shows, which is a regular ODE up to any t* - tau (skatetrace.paper.singular).
+@pytest.fixture(scope="module")
+def crossings():
+    """approach_a_zero forward and backward for every published appendix optimum, keyed by (row key, direction)."""
+    return {(row.key, d): approach_a_zero(row, direction=d) for row in APPENDIX for d in (1, -1)}
+
+
 @pytest.mark.parametrize("row", APPENDIX, ids=lambda r: r.key)
-def test_appendix_optima_run_into_a_zero(row, published):
+def test_appendix_optima_run_into_a_zero(row, published, crossings):
     ev = published[row.key]
-    assert ev.regularity_margin < 0
-    assert ev.min_abs_a < 1e-3, ev.min_abs_a
     ctrl = control_from_params(row.method, row.published)
-    # Something breaks down on every row, and it breaks down exactly where a = 0.
-    failed_halves = [h for h in _halves(row) if h.status in ("failed", "budget")]
-    assert failed_halves or not ev.full_success, ev.notes
-    assert ev.notes
-    for h in failed_halves:
-        assert abs(ctrl.a(h.t_end)[0]) < 1e-9, (row.key, h.message)
-    if not ev.full_success:
-        t = ev.full["t"]
-        assert min(abs(ctrl.a(t[0])[0]), abs(ctrl.a(t[-1])[0])) < 1e-9, (row.key, ev.notes)
-
-
-def _halves(row):
-    return integrate_reduced(P, row.radius, row.initial, control_from_params(row.method, row.published), row.T,
-                             TIGHT_SOLVER).halves()
+    assert ev.regularity_margin < 0
+    # a(t) = a1 + a2 sin wt + a3 cos wt has zeros: its range is a1 +- sqrt(a2^2 + a3^2)
+    assert abs(ctrl.a1) < math.hypot(ctrl.a2, ctrl.a3)
+    # At least one half of the arc reaches a zero of a: the reduced model is still moving (well away from
+    # speed 0) at t* - 1e-6, so the arc cannot end before it.
+    reached = [c for d in (1, -1) if (c := crossings[(row.key, d)]).reaches]
+    assert reached, row.key
+    for c in reached:
+        assert abs(ctrl.a(c.t_star)[0]) <= 1e-12
+        assert 0 < abs(c.t_star) < row.T
+        assert c.speed_at_crossing > 0.05, c.speed_at_crossing
+    # the evaluated arc gets to a = 0 too (by sign change or by stopping there), whatever it does after
+    assert ev.min_abs_a < 1e-3, ev.min_abs_a
 
 
 @pytest.mark.parametrize("row", [paper_row(m, k) for m in ("point", "length") for k in (1, 3)],
                          ids=lambda r: r.key)
-def test_appendix_arcs_1_and_3_blow_up_at_a_zero(row, published):
-    ev = published[row.key]
-    assert not ev.completed, ev.notes
-    assert ev.min_abs_a < 1e-9
-    assert ev.peak_mass_energy > 1e3, ev.peak_mass_energy
+def test_appendix_arcs_1_and_3_blow_up_at_a_zero(row, crossings):
+    """bdot ~ tau^(mu - 1) and KE_m ~ tau^(2 (mu - 1)) approaching the forward zero of a, 0 < mu < 1.
+
+    mu comes from the state at the smallest tau (singular.crossing_exponent, a local linearisation);
+    the exponents are fitted over tau = 1e-2 .. 1e-6: two independent measurements of one law.
+    """
+    c = crossings[(row.key, 1)]
+    assert c.reaches and c.blows_up, (c.mu, c.speed_at_crossing)
+    assert 0.4 < c.mu < 0.75, c.mu  # PHYSICS.md's 1/2 is one case: 0.53-0.62 here
+    k = c.mu - 1
+    assert 0.8 <= c.bdot_exponent / k <= 1.2, (c.bdot_exponent, k)
+    assert 0.8 <= c.energy_exponent / (2 * k) <= 1.2, (c.energy_exponent, 2 * k)
+    # and they really grow: four decades closer, |bdot| x > 30, the mass energy x > 1000
+    assert c.bdot[-1] > 30 * c.bdot[0] and c.mass_energy[-1] > 1e3 * c.mass_energy[0]
+    assert np.all(np.diff(c.bdot) > 0) and np.all(np.diff(c.mass_energy) > 0)
 
 
 @pytest.mark.parametrize("row", [paper_row(m, 2) for m in ("point", "length")], ids=lambda r: r.key)
-def test_appendix_arcs_2_cannot_be_replayed_through_a_zero(row, published):
-    ev = published[row.key]
-    assert not ev.full_success and any("full dynamics" in n for n in ev.notes), ev.notes
+def test_appendix_arcs_2_reach_a_zero_where_the_continuation_is_not_unique(row, crossings):
+    """On arc 2 the forward half reaches a = 0 with mu > 1: bdot stays bounded, but a bdot -> 0 forces the
+    state onto the singular set F = 0, which attracts from both sides; so the motion after t* is not
+    determined by the motion before it (any C |t - t*|^mu may be added), and the arc's length and cost
+    are whatever the integrator's step across t* makes them (reproduction.json shows the spread)."""
+    c = crossings[(row.key, 1)]
+    assert c.reaches and not c.blows_up and c.mu > 1.05, c.mu
+    assert max(c.bdot) < 5 * max(c.bdot[0], 1.0), c.bdot  # bounded
     ctrl = control_from_params(row.method, row.published)
-    # a changes sign inside the reduced arc, and the full replay stops right there
-    a = ev.series["a"]
-    assert np.any(a[:-1] * a[1:] < 0)
-    t_end = ev.full["t"][-1]
-    t_zero = brentq(lambda t: ctrl.a(t)[0], t_end - 0.05, t_end + 0.05)
-    assert t_end == pytest.approx(t_zero, abs=1e-6)
-    assert t_end < ev.series["t"][-1]
+    a = np.array([ctrl.a(c.t_star - tau)[0] for tau in c.taus])
+    ab = np.abs(a) * np.array(c.bdot)
+    assert ab[-1] < 1e-4 and ab[-1] < 1e-2 * ab[0], ab  # a bdot -> 0: the state is pressed onto F = 0
+    # Attraction from the far side: two far-side states 1e-3 apart along the fast direction
+    # (db, dp1, dp2) = (1, -m xi2, kappa m xi2), integrated backwards towards t*, end far closer together.
+    # Any far-side state shows it; to avoid stepping across t* (round-off decides how), the state the arc
+    # has at t* - d0 is placed at t* + d0.
+    r, d0 = row.radius, 0.05
+    near = integrate_reduced(P, r, row.initial, ctrl, c.t_star - d0, TIGHT_SOLVER, backward=False)
+    assert near.forward.status == "time"
+    s = near.series([c.t_star - d0])
+    w, t0 = ctrl.omega, c.t_star + d0
+    shifted = HarmonicControl(ctrl.a1, ctrl.a2 * math.cos(w * t0) - ctrl.a3 * math.sin(w * t0),
+                              ctrl.a2 * math.sin(w * t0) + ctrl.a3 * math.cos(w * t0), w)
+    ends = []
+    for delta in (0.0, 1e-3):
+        st = (s["p1"][0] - P.m * s["xi2"][0] * delta, s["p2"][0] + P.m * s["xi2"][0] * delta / r, s["theta"][0],
+              s["x"][0], s["y"][0], s["b"][0] + delta)
+        back = integrate_reduced(P, r, st, shifted, d0 - 1e-4, TIGHT_SOLVER).backward
+        assert back.status == "time"
+        ends.append(back.state[4, -1])
+    # 16x and 63x closer on arcs 2 of Tables 6 and 4 (stable to 8 digits over perturbed runs)
+    assert abs(ends[1] - ends[0]) < 1e-3 / 8, abs(ends[1] - ends[0])
 
 
-@pytest.mark.parametrize("arc", [1, 3])
-def test_table6_optima_miss_their_lengths_by_far_more_than_printed(arc, published):
-    row = paper_row("length", arc)
-    ev = published[row.key]
-    printed = math.sqrt(row.published_error)
-    assert abs(ev.length_error) > 0.1, (row.key, ev.length_error, printed)
-    assert abs(ev.length_error) > 10 * printed, (row.key, ev.length_error, printed)
+@pytest.mark.parametrize("row", APPENDIX, ids=lambda r: r.key)
+def test_appendix_backward_crossings_that_are_reached_are_not_blow_ups(row, crossings):
+    # Backward from t = 0 the first zero of a is either not reached (the speed vanishes first) or has
+    # mu near or above 1: bdot does not visibly grow there. (Only the forward crossings of arcs 1, 3 blow up.)
+    c = crossings[(row.key, -1)]
+    if c.reaches:
+        assert not c.blows_up and c.mu > 0.85, c.mu
+        assert max(c.bdot) < 5 * max(c.bdot[0], 1.0), c.bdot
+
+
+def test_approach_a_zero_validation():
+    with pytest.raises(ValueError, match="appendix"):
+        approach_a_zero(paper_row("main", 1))
+    with pytest.raises(ValueError, match="direction"):
+        approach_a_zero(paper_row("length", 2), direction=0)
+    # no zero of a within T backward on Table 6 arc 2
+    c = approach_a_zero(paper_row("length", 2), direction=-1)
+    assert c.t_star is None and not c.reaches and not c.blows_up
+    assert math.isnan(c.mu)
+    json.dumps(c.to_dict(), allow_nan=True)
+
+
+def test_crossing_exponent_by_hand():
+    # mu = F_b / (g adot) at a = 0, from the partial derivatives of F = -(c_a adot + c_0) (curvature_coefficients)
+    kappa, p1, p2, b, adot = 0.8, 1.3, -0.4, 0.7, -1.1
+    h = 1e-6
+
+    def F(p1, p2, b):
+        c_a, _, c_0 = curvature_coefficients(PARAMS, kappa, p1, p2, 0.0, b)
+        return -(c_a * adot + c_0)
+
+    M, m, I = PARAMS.M, PARAMS.m, PARAMS.I
+    xi1, xi2, _ = velocities(PARAMS, p1, p2, 0.0, b, adot, 0.0)
+    Fb = (F(p1, p2, b + h) - F(p1, p2, b - h)) / (2 * h)
+    Fp1 = (F(p1 + h, p2, b) - F(p1 - h, p2, b)) / (2 * h)
+    Fp2 = (F(p1, p2 + h, b) - F(p1, p2 - h, b)) / (2 * h)
+    g = m * (kappa * m * b - (M + m))
+    expected = (Fb - m * xi2 * Fp1 + kappa * m * xi2 * Fp2) / (g * adot)
+    assert crossing_exponent(PARAMS, kappa, p1, p2, b, adot) == pytest.approx(expected, rel=1e-8)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -65,7 +65,7 @@ class ArcEvaluation:
     regularity_margin : float or None
         ``a1^2 - (a2^2 + a3^2)``; regular if positive (None for the exact engine).
     min_abs_a, min_dist_b_singular, min_dist_singular_point : float
-        Along the arc: ``min |a|`` and ``min |b - (M + m) r / m|`` (the singular set of
+        Along the arc: ``min |a|`` (0 where ``a`` changes sign or an end stops at ``a = 0``) and ``min |b - (M + m) r / m|`` (the singular set of
         (b_diff_eq)), and the distance to ``(0, -I / (M r))``, the only point where the exact
         engine's formulation is singular.
     peak_mass_energy, peak_skate_energy : float
@@ -147,11 +147,12 @@ def _controls_fn(arc: ReducedArc):
     return fn
 
 
-def full_replay(arc: ReducedArc, initial, n: int = 3000, max_nfev: int = 400_000) -> dict:
+def full_replay(arc: ReducedArc, initial, n: int = 3000, max_nfev: int = 400_000, *, rtol: float = 1e-12,
+                atol: float = 1e-13) -> dict:
     """Simulate the full dynamics under ``arc``'s mass motion from ``initial`` over ``[t1, t2]``.
 
     Returns samples ``t, p1, p2, theta, x, y, a, b, adot, bdot, xi1, xi2`` (ordered in time), and
-    ``success``/``message`` of the two integrations.
+    ``success``/``message`` of the two integrations (DOP853 at ``rtol``, ``atol``).
     """
     params = arc.params
     fn = _controls_fn(arc)
@@ -161,7 +162,7 @@ def full_replay(arc: ReducedArc, initial, n: int = 3000, max_nfev: int = 400_000
         if t_end == 0.0:
             continue
         with np.errstate(all="ignore"):
-            tr = simulate(params, y0, fn, (0.0, t_end), rtol=1e-12, atol=1e-13, max_nfev=max_nfev)
+            tr = simulate(params, y0, fn, (0.0, t_end), rtol=rtol, atol=atol, max_nfev=max_nfev)
         ok &= tr.success
         msgs.append(tr.message)
         if tr.success:
@@ -194,8 +195,13 @@ def _circle_distance(row: PaperRow, x, y) -> float:
 
 
 def evaluate_paper_arc(row: PaperRow, values, label: str, *, params: SleighParams = SleighParams(),
-                       options: ReducedOptions = TIGHT_SOLVER, seconds: float = math.nan) -> ArcEvaluation:
-    """All yardsticks for the paper's method with control parameters ``values`` on ``row``."""
+                       options: ReducedOptions = TIGHT_SOLVER, seconds: float = math.nan,
+                       full_rtol: float = 1e-12) -> ArcEvaluation:
+    """All yardsticks for the paper's method with control parameters ``values`` on ``row``.
+
+    ``options`` integrate the reduced model, ``full_rtol`` (``atol = full_rtol / 10``) the full
+    dynamics; :mod:`~skatetrace.paper.conditioning` varies both to see which yardsticks are stable.
+    """
     control = control_from_params(row.method, values)
     arc = integrate_reduced(params, row.radius, row.initial, control, row.T, options)
     cost = _cost_of(row, arc, 2.0)  # the point cost reads the forward half only
@@ -204,7 +210,7 @@ def evaluate_paper_arc(row: PaperRow, values, label: str, *, params: SleighParam
     else:
         miss = arc.length - row.target_length
     s = arc.sample(1200)
-    full = full_replay(arc, row.initial)
+    full = full_replay(arc, row.initial, rtol=full_rtol, atol=full_rtol / 10)
     notes = [f"{name} half: {h.message}" for name, h in (("backward", arc.backward), ("forward", arc.forward))
              if h is not None and h.status != "stopped"]
     if not full["success"]:
@@ -220,6 +226,8 @@ def evaluate_paper_arc(row: PaperRow, values, label: str, *, params: SleighParam
     C = deviation_cost(path, X, L).value if np.all(np.isfinite(path)) and path.shape[1] > 1 else math.inf
     fs = (float(full["xi2"][0]), float(full["xi2"][-1])) if full["t"].size else (math.nan, math.nan)
     sd = singular_distances(params, row.radius, s["a"], s["b"])
+    if _reaches_a_zero(s["a"]):
+        sd = (0.0,) + sd[1:]
     ke_m = mass_energy(params, s["xi1"], s["xi2"], s["a"], s["b"], s["adot"], s["bdot"])
     ke_s = skate_energy(params, s["xi1"], s["xi2"])
     full_len = float(np.sum(np.hypot(np.diff(full["x"]), np.diff(full["y"])))) if full["t"].size > 1 else 0.0
@@ -231,6 +239,17 @@ def evaluate_paper_arc(row: PaperRow, values, label: str, *, params: SleighParam
         min_dist_singular_point=sd[2], peak_mass_energy=_finite_max(ke_m), peak_skate_energy=_finite_max(ke_s),
         full_success=bool(full["success"]), seconds=seconds, notes=tuple(notes), series=s, full=full,
     )
+
+
+def _reaches_a_zero(a, tol: float = 1e-9) -> bool:
+    """``a`` changes sign along the samples, or comes within ``tol`` of 0 (an end stopped at a zero).
+
+    Then ``min |a|`` over the arc is 0, whatever the sampled minimum happens to be: the samples'
+    smallest ``|a|`` (1e-4 or 1e-15) only says how close a sample or a failed step fell to the zero.
+    """
+    a = np.asarray(a, dtype=float)
+    a = a[np.isfinite(a)]
+    return bool(a.size and (np.any(a[:-1] * a[1:] < 0) or np.min(np.abs(a)) <= tol))
 
 
 def _finite_max(v) -> float:
@@ -278,6 +297,8 @@ def evaluate_exact_arc(row: PaperRow, *, params: SleighParams = SleighParams(),
     else:
         cost = (row.exact_length - sec.length) ** 2
     sd = singular_distances(params, row.radius, s["a"], s["b"])
+    if _reaches_a_zero(s["a"]):
+        sd = (0.0,) + sd[1:]
     ke_m = mass_energy(params, s["xi1"], s["xi2"], s["a"], s["b"], s["adot"], s["bdot"])
     ke_s = skate_energy(params, s["xi1"], s["xi2"])
     xi1r, xi2r, _ = report.replay.velocities(params)
