@@ -143,48 +143,77 @@ def _b_singular_set(params: SleighParams, exact: Mapping[int, tuple[PaperRow, Ar
         confirmed=confirmed)
 
 
-def _regularity(appendix: Sequence[tuple[PaperRow, ArcEvaluation]]) -> Erratum:
+def _regularity(appendix: Sequence[tuple[PaperRow, ArcEvaluation]], crossings: Mapping[str, tuple] | None = None
+                ) -> Erratum:
     parts, bad = [], 0
+    crossings = crossings or {}
     for row, ev in appendix:
         a1, a2, a3, _ = row.published
         margin = a1 * a1 - (a2 * a2 + a3 * a3)
         bad += margin <= 0
-        parts.append(f"Table {row.tables.split('-')[1]} arc {row.arc}: a1^2 - (a2^2 + a3^2) = {margin:.3g}, "
-                     f"min |a| = {ev.min_abs_a:.2g}")
+        text = f"Table {row.tables.split('-')[1]} arc {row.arc}: a1^2 - (a2^2 + a3^2) = {margin:.3g}"
+        reached = [c for c in crossings.get(row.key, ()) if c.reaches]
+        if reached:
+            text += "; the arc reaches a = 0 at " + ", ".join(
+                f"t = {c.t_star:.3g} ({'bdot ~ tau^' + format(c.bdot_exponent, '.2f') if c.blows_up else 'bdot bounded, continuation not unique'})"
+                for c in reached)
+        else:
+            text += f", min |a| = {ev.min_abs_a:.2g}"
+        parts.append(text)
     return Erratum(
         key="regularity", where="eq. (sing_cond); Sections 'Point-based' and 'Length-based Optimization'",
         paper="the point-based optima satisfy a1^2 > a2^2 + a3^2; only the length-based ones violate it",
-        correct="every published appendix optimum violates it: a(t) reaches 0, where bdot and the mass energy diverge",
+        correct="every published appendix optimum violates it: a(t) reaches 0, where (b_diff_eq) is singular: bdot "
+                "and the mass energy diverge there, or stay bounded with no unique continuation past it",
         evidence="; ".join(parts), confirmed=bad == len(appendix))
 
 
-def _tables(rows: Sequence[tuple[PaperRow, ArcEvaluation]], best: Mapping[str, float]) -> Erratum:
+def _tables(rows: Sequence[tuple[PaperRow, ArcEvaluation]], best: Mapping[str, float],
+            conditioning: Mapping | None = None) -> Erratum:
     parts, unrepro = [], 0
+    conditioning = conditioning or {}
     for row, ev in rows:
+        cond = conditioning.get(row.key)
+        if cond is not None and not cond.spreads["cost"].stable:
+            # The cost depends on round-off (the arc crosses a = 0): no printed digit can be reproduced.
+            unrepro += 1
+            parts.append(f"Table {row.tables} arc {row.arc}: the evaluation is ill-conditioned (cost "
+                         f"{cond.text('cost')}, full dynamics reaches both ends: {cond.text('full_success')})")
+            continue
         b = best.get(row.key, ev.cost)
+        err = cond.text("length_error") if cond is not None else f"{ev.length_error:.3g}"
+        cost = cond.text("cost") if cond is not None else f"{ev.cost:.3g}"
         if row.method == "point":
             claim = "lands on its target"
             miss = b ** 0.25
-            got = f"misses the target by {ev.length_error:.3g} (by {miss:.2g} at best within the printed rounding)"
+            got = f"misses the target by {err} (by {miss:.2g} at best within the printed rounding)"
             fails = miss > 1e-3
         else:
             claim = f"error {row.published_error:.4g}"
-            got = (f"length off by {ev.length_error:+.3g} (cost |dL|^2 = {ev.cost:.3g}; {b:.3g} at best within the "
+            got = (f"length off by {err} (cost |dL|^2 = {cost}; {b:.3g} at best within the "
                    "printed rounding)")
             fails = b > 10 * row.published_error
         if not ev.full_success or ev.full_deviation > 1e-6:
             fails = True
         unrepro += fails
-        full = (f"full dynamics strays {ev.full_deviation:.3g} from the circle" if ev.full_success else
-                f"full dynamics stays within {ev.full_deviation:.3g} of the circle until it breaks down at a "
-                "singular control")
+        if cond is not None and not cond.spreads["full_success"].stable:
+            full = (f"the full dynamics stays within {cond.text('full_deviation')} of the circle while it runs; "
+                    f"whether it reaches both ends depends on round-off ({cond.text('full_success')})")
+        elif cond is not None:
+            full = (f"full dynamics strays {cond.text('full_deviation')} from the circle" if ev.full_success else
+                    f"full dynamics stays within {cond.text('full_deviation')} of the circle until it stops at a "
+                    "singular control (in every perturbed run)")
+        else:
+            full = (f"full dynamics strays {ev.full_deviation:.3g} from the circle" if ev.full_success else
+                    f"full dynamics stays within {ev.full_deviation:.3g} of the circle until it breaks down at a "
+                    "singular control")
         parts.append(f"Table {row.tables} arc {row.arc} ({claim}): {got}; {full}")
     return Erratum(
         key="tables", where="Tables 2, 4 and 6",
         paper="the optimised controls produce the arcs to the printed errors",
         correct=f"{unrepro} of {len(rows)} published optima do not reproduce (even with parameters that round to "
                 "the printed ones) under an accurate integration of the reduced model, or break down or leave the "
-                "circle in the full dynamics",
+                "circle in the full dynamics, or cross a = 0 where the result depends on round-off",
         evidence="; ".join(parts), confirmed=unrepro > 0)
 
 
@@ -205,7 +234,8 @@ def _flower() -> Erratum:
 
 def find_errata(params: SleighParams, exact: Mapping[int, tuple[PaperRow, ArcEvaluation]],
                 published: Sequence[tuple[PaperRow, ArcEvaluation]],
-                best_costs: Mapping[str, float] | None = None) -> list[Erratum]:
+                best_costs: Mapping[str, float] | None = None, conditioning: Mapping | None = None,
+                crossings: Mapping[str, tuple] | None = None) -> list[Erratum]:
     """Measure every known erratum.
 
     Parameters
@@ -220,6 +250,11 @@ def find_errata(params: SleighParams, exact: Mapping[int, tuple[PaperRow, ArcEva
         Row key -> least cost with parameters that round to the published ones
         (:func:`~skatetrace.paper.procedure.best_within_rounding`); the verdict uses it so that
         rounding of the printed parameters is never taken for a discrepancy.
+    conditioning : mapping, optional
+        Row key -> :class:`~skatetrace.paper.conditioning.Conditioning` of the published
+        optimum; a row whose cost is ill-conditioned is reported as such, not by one run's digits.
+    crossings : mapping, optional
+        Row key -> :class:`~skatetrace.paper.singular.Crossing` of each half (appendix rows).
     """
     out = []
     if exact:
@@ -231,8 +266,8 @@ def find_errata(params: SleighParams, exact: Mapping[int, tuple[PaperRow, ArcEva
         out.append(_b_singular_set(params, exact))
     appendix = [(r, e) for r, e in published if r.method != "main"]
     if appendix:
-        out.append(_regularity(appendix))
+        out.append(_regularity(appendix, crossings))
     if published:
-        out.append(_tables(published, best_costs or {}))
+        out.append(_tables(published, best_costs or {}, conditioning))
     out.append(_flower())
     return out
