@@ -1,6 +1,7 @@
 """Rests at smooth joins: the same path, shorter sections, and the trace-and-verify loop."""
 
 import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -84,33 +85,53 @@ def test_bad_policy_is_refused():
         trace_and_verify(fig, rests="sometimes")
 
 
-def test_a_launch_back_through_a_whole_circle_fails_and_a_rest_at_the_waist_fixes_it():
+def test_a_launch_back_through_a_whole_circle_is_ill_conditioned_and_a_rest_at_the_waist_fixes_it(monkeypatch):
     # A figure eight of two 1.5 m circles for a real skater (SI units), the second circle longer by
     # 1e-9 so that the glide lies on it: the launch then runs back through the whole first circle,
-    # and the open-loop replay amplifies the last digits of the sampled controls: it strays by
-    # 1.7e-6 m (1e-5 m with the earlier bisection sampler). At a tolerance of 1e-7 x size (6e-7 m)
-    # that fails; with a rest at the waist both circles are launched and stopped within themselves
-    # and the replay stays within 4e-8 m.
+    # a long open-loop manoeuvre whose replay amplifies any error of the controls. With a rest at
+    # the waist both circles are launched and stopped within themselves.
+    #
+    # How far the unrested replay strays is round-off's doing, not the physics': perturbing the
+    # sampled controls by 1e-15..1e-12 (relative) spreads it over 2.3e-7..6e-5 m (30 draws), on
+    # both sides of a 1e-7 x size tolerance (6e-7 m). So the outcome is not asserted from round-off:
+    # the controls are perturbed by a seeded 1e-9 (relative), a million times round-off, and the
+    # robust fact is asserted, the conditioning: over 16 seeds the single section strays by
+    # 1.2e-4..4.2e-3 m (median 8.4e-4), the two rested ones by 4.6e-7..7.6e-6 m (median 1.9e-6),
+    # amplification factors of about 3e6 and 3e3. Seed 0 gives 7.8e-4 and 2.2e-6 m; the tolerance,
+    # 5e-6 x size = 3e-5 m, sits geometrically between them (26x and 14x away).
     R = 1.5
     segs = (Segment(1 / R, 2 * math.pi * R), Segment(-1 / R, 2 * math.pi * R * (1 + 1e-9)))
     fig = Figure("eight", (Curve(segs, (SMOOTH,)),), skater_params())
     opts = TraceOptions(speed=2.0, placement="first")  # the default picks a placement that needs no rest
-    never = trace_and_verify(fig, options=opts, rests="never", rel_tol=1e-7)
+    # Unperturbed, with a rest at the waist the replay stays within 1e-7 x size: 7e-9..8e-8 m over
+    # the same 30 draws of round-off-sized perturbations, at least 7x inside.
+    joins = trace_and_verify(fig, options=opts, rests="joins", rel_tol=1e-7)
+    assert joins.rests == ((0, 1),) and joins.rounds == 1 and joins.success, joins.message
+
+    real_verify = rests_module.verify
+
+    def perturbed_verify(trace, schedule, rel_tol):
+        rng = np.random.default_rng(0)
+        noisy = {c: getattr(schedule, c) * (1.0 + 1e-9 * rng.standard_normal(schedule.t.size))
+                 for c in ("a", "b", "adot", "bdot")}
+        return real_verify(trace, replace(schedule, **noisy), rel_tol=rel_tol)
+
+    monkeypatch.setattr(rests_module, "verify", perturbed_verify)
+    never = trace_and_verify(fig, options=opts, rests="never", rel_tol=5e-6)
     assert never.trace.success and not never.report.success
-    auto = trace_and_verify(fig, options=opts, rests="auto", rel_tol=1e-7)
-    assert auto.success and auto.rests == ((0, 1),) and auto.rounds == 2
-    assert auto.report.max_deviation < 0.2 * auto.report.tolerance
-    assert auto.report.max_deviation < 0.05 * never.report.max_deviation
-    assert auto.report.max_cusp_speed < 1e-8 * opts.speed
+    assert never.report.max_deviation > 3.0 * never.report.tolerance  # measured 26x
+    auto = trace_and_verify(fig, options=opts, rests="auto", rel_tol=5e-6)
+    assert auto.success and auto.rests == ((0, 1),) and auto.rounds == 2, auto.message
+    assert auto.report.max_deviation < 0.3 * auto.report.tolerance  # measured 0.07
+    # orders of magnitude better conditioned: measured 2.2e-6 / 7.8e-4 = 0.003
+    assert auto.report.max_deviation < 0.03 * never.report.max_deviation
     # "at rest" is judged against the fastest motion in each section: here the mass, relative to
     # the ice, moving several times faster than the 2 m/s glide
     for checks, sec in zip(auto.report.sections, auto.trace.sections):
         mass_peak = math.sqrt(2.0 * sec.metrics["peak_mass_kinetic_energy"] / sec.params.m)
         assert checks["speed_scale"] >= 0.99 * mass_peak > 2.0 * opts.speed
         assert checks["cusp_speed_limit"] == pytest.approx(1e-8 * checks["speed_scale"])
-    joins = trace_and_verify(fig, options=opts, rests="joins", rel_tol=1e-7)
-    assert joins.rests == ((0, 1),) and joins.rounds == 1 and joins.success
-    np.testing.assert_allclose(joins.report.max_deviation, auto.report.max_deviation, rtol=1e-6)
+        assert max(checks["start_speed"], checks["end_speed"]) < 0.3 * checks["cusp_speed_limit"]  # measured < 0.11
 
 
 def test_least_reach_placement_keeps_the_mass_closer_than_the_first_that_works():
