@@ -68,7 +68,8 @@ def test_locked_mass_glides_in_a_straight_line():
 @pytest.mark.parametrize("params", [SleighParams(), SleighParams(M=55.0, m=17.0, I=9.0)])
 def test_is_scipys_dop853_step_for_step_on_smooth_controls(params):
     # one cubic per control (two rows): the right-hand side is analytic, so the two integrations
-    # take the same steps and agree to rounding
+    # take the same steps and agree to rounding (at most 8e-15 relative under 60 draws of inputs
+    # perturbed by 1e-15..1e-11; the bound leaves two orders of magnitude for other CPUs' rounding)
     t = np.array([0.0, 2.5])
     s = _schedule(t, np.array([0.1, -0.3]), np.array([0.4, 0.2]), np.array([0.5, -0.2]), np.array([-0.3, 0.6]))
     y0 = [0.3, 1.1, 0.2, -0.5, 0.4]
@@ -78,21 +79,25 @@ def test_is_scipys_dop853_step_for_step_on_smooth_controls(params):
     assert run.success and ref.success
     assert run.nsteps == ref.t.size - 1
     scale = np.max(np.abs(ref.state), axis=1, keepdims=True)
-    assert np.max(np.abs(run.states - ref(tt)) / scale) < 1e-13
+    assert np.max(np.abs(run.states - ref(tt)) / scale) < 1e-12
 
 
 def test_matches_solve_ivp_on_a_swinging_mass():
     # Hermite controls have a kink in their second derivative at every knot; there the error
     # estimate is near the threshold, the two integrations part ways by rounding and agree to
-    # their own accuracy (about 1e-10 here), not to rounding
+    # their own accuracy, not to rounding: under 25 draws of the initial state and the controls
+    # perturbed by 1e-15..1e-11 they differ by 4e-11..8e-10 (relative) and their step counts by
+    # up to 5.5%. Agreement to 1e-8 with step counts within 15% is what is robust, and still
+    # telling: the replay at rtol 1e-12 instead of 1e-13 takes 26% fewer steps, at 1e-10 it
+    # differs by 6e-8.
     s = _wiggle()
     y0 = [0.3, 1.1, 0.2, -0.5, 0.4]
     tt = np.linspace(0.0, s.t[-1], 257)
     run = replay_chunk(SleighParams(), y0, s, 0, s.t.size, tt)
     ref = simulate(SleighParams(), y0, s.scalar_interpolant(0, s.t.size), (0.0, float(s.t[-1])), rtol=1e-13, atol=1e-14)
     scale = np.max(np.abs(ref.state), axis=1, keepdims=True)
-    assert np.max(np.abs(run.states - ref(tt)) / scale) < 1e-9
-    assert abs(run.nsteps - (ref.t.size - 1)) <= 0.05 * run.nsteps
+    assert np.max(np.abs(run.states - ref(tt)) / scale) < 1e-8
+    assert abs(run.nsteps - (ref.t.size - 1)) <= 0.15 * run.nsteps
 
 
 def test_matches_solve_ivp_on_the_double_flowers_controls(flower):
@@ -106,9 +111,11 @@ def test_matches_solve_ivp_on_the_double_flowers_controls(flower):
     run = replay_chunk(tr.params, y0, schedule, i0, i1, tt)
     ref = simulate(tr.params, y0, schedule.scalar_interpolant(i0, i1), (t0, t1), rtol=1e-13, atol=1e-14)
     scale = np.max(np.abs(ref.state), axis=1, keepdims=True)
-    # 712 knots, each a kink of the second derivative: agreement to the integrations' accuracy
-    assert np.max(np.abs(run.states - ref(tt)) / scale) < 1e-9
-    np.testing.assert_allclose(run.y_end, ref.state[:, -1], rtol=0, atol=1e-9 * float(scale.max()))
+    # 712 knots, each a kink of the second derivative: agreement to the integrations' accuracy,
+    # which is not rounding (7e-11..1.7e-10 along the chunk, 8e-12..7e-11 at its end, under the
+    # controls perturbed by 1e-15..1e-12; the swinging mass above reaches 8e-10)
+    assert np.max(np.abs(run.states - ref(tt)) / scale) < 1e-8
+    np.testing.assert_allclose(run.y_end, ref.state[:, -1], rtol=0, atol=1e-8 * float(scale.max()))
 
 
 def test_verify_engines_agree(flower):
@@ -119,6 +126,7 @@ def test_verify_engines_agree(flower):
     # the compiled replay reports the controls it integrated with: the schedule's own interpolant
     np.testing.assert_array_equal(fast.controls, slow.controls)
     # the open-loop replay carries rounding differences through 32 sections: still far below the tolerance
+    # (2e-10..1.2e-9 x size under the controls perturbed by 1e-15..1e-12)
     assert np.max(np.abs(fast.state[3:] - slow.state[3:])) < 1e-7 * tr.figure.size()
     with pytest.raises(ValueError, match="engine"):
         verify_module.replay(tr, schedule, engine="rk4")
