@@ -169,8 +169,14 @@ def _initial_step(M, m, I, coef, s0, alpha, t0, y0, f0, t_bound, direction, rtol
 
 @njit(cache=True)
 def _grow(arr, n):
+    # Element by element, here and wherever compiled code copies arrays: numba compiles an array-to-slice
+    # assignment with its broadcasting and shape-mismatch error formatting (string code), seconds of a
+    # first run's compilation for nothing (a copy is a copy).
     out = np.empty((2 * arr.shape[0],) + arr.shape[1:])
-    out[:n] = arr[:n]
+    flat_out = out.reshape(-1)
+    flat_in = arr.reshape(-1)
+    for i in range(n * (flat_in.size // max(arr.shape[0], 1))):
+        flat_out[i] = flat_in[i]
     return out
 
 
@@ -194,7 +200,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
     step_y = np.empty((cap, n))
     step_F = np.empty((cap, _POWER, n))
     step_leg = np.empty(cap)
-    nsteps = 0
+    nsteps = np.int64(0)  # not the literal 0: numba would compile _grow for Literal[int](0) as well as int64
     nfev = 0
     K = np.empty((_NS + 1, n))
     ytmp = np.empty(n)
@@ -326,8 +332,11 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                     step_leg = _grow(step_leg, nsteps)
                 step_t[nsteps] = t
                 step_h[nsteps] = h
-                step_y[nsteps] = y
-                step_F[nsteps] = F
+                for i in range(n):
+                    step_y[nsteps, i] = y[i]
+                for r in range(_POWER):
+                    for i in range(n):
+                        step_F[nsteps, r, i] = F[r, i]
                 step_leg[nsteps] = leg
                 nsteps += 1
             if hit >= 0:

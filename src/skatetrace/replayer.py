@@ -70,7 +70,8 @@ def _controls_at(knots, ca, cb, t_out):
     ctl = np.zeros(5)
     for j in range(t_out.size):
         _controls(knots, ca, cb, t_out[j], ctl)
-        out[:, j] = ctl[:4]
+        for r in range(4):
+            out[r, j] = ctl[r]
     return out
 
 
@@ -101,7 +102,8 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
     ctl = np.zeros(5)
     j = 0
     while j < nout and t_out[j] <= t:
-        out[:, j] = y
+        for r in range(n):
+            out[r, j] = y[r]
         j += 1
     f = np.empty(n)
     f_new = np.empty(n)
@@ -140,7 +142,8 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
                     acc += rk.B[q] * Kx[q, i]
                 ynew[i] = y[i] + h * acc
             _rhs(M, m, I, knots, ca, cb, t_new, ynew, f_new, ctl)
-            Kx[rk.N_STAGES] = f_new
+            for i in range(n):
+                Kx[rk.N_STAGES, i] = f_new[i]
             nfev += rk.N_STAGES
             if nfev > max_nfev:
                 return _EXHAUSTED, t, y, out, nfev, nsteps
@@ -165,13 +168,15 @@ def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
             rk.dense_coefficients(Kx, h, y, ynew, f_new, F)
             while j < nout and t_out[j] <= t_new:
                 if t_out[j] == t_new:
-                    out[:, j] = ynew
+                    for r in range(n):
+                        out[r, j] = ynew[r]
                 else:
                     rk.interpolate_into(t, h, y, F, t_out[j], out[:, j])
                 j += 1
         t = t_new
-        y[:] = ynew
-        f[:] = f_new
+        for i in range(n):
+            y[i] = ynew[i]
+            f[i] = f_new[i]
     return _REACHED, t, y, out, nfev, nsteps
 
 
