@@ -274,6 +274,10 @@ def _parse_d(d: str, where: str, notes: list[str]) -> list:
     """svgpathtools segments of path data, its warnings appended to ``notes``."""
     if not d or not d.strip():
         return []
+    if d.lstrip(" \t\r\n\f,")[:1] not in ("M", "m"):
+        # SVG path data begins with a moveto; without one svgpathtools leaves segments without a start.
+        raise DrawingError(f"{where}: the path data {_shorten(d)!r} cannot be read (it does not begin with a "
+                           "moveto, 'M' or 'm'); expected SVG path commands such as 'M 0,0 c 10,0 10,10 20,10 z'")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -797,6 +801,8 @@ def parse_length(text: str) -> tuple[float, str]:
     factor = _UNITS[unit]
     if factor is None:
         return value, "model"
+    if not value * factor > 0:  # underflow, e.g. "5e-324mm"
+        raise DrawingError(f"a length must be positive, got {text!r}, which is 0 in metres; e.g. {_LENGTH_FORMS}")
     return value * factor, "m"
 
 

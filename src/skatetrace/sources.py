@@ -38,6 +38,13 @@ DEFAULT_REL_TOL = 1e-3
 DEFAULT_EXACT_REL_TOL = 1e-7
 #: Arc mode's corner tolerance (degrees): joins turning by less are smooth. Exact mode uses less.
 EXACT_MAX_CORNER_DEG = 0.5
+#: Smallest arc-fitting tolerance, as a fraction of the figure's size: the certified fit needs
+#: about 17 s per example drawing at 1e-9 and does not finish in minutes at 1e-12. Exact mode
+#: (curvature splines) reaches far smaller distances quickly.
+MIN_REL_TOL = 1e-8
+#: Sizes a drawing may be scaled to (metres or model units); its pieces must then lie within the
+#: figure limits of :mod:`skatetrace.figure` (lengths 1e-9 to 1e9).
+MIN_SIZE, MAX_SIZE = 1e-6, 1e6
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -93,16 +100,25 @@ def _size(size) -> tuple[float | None, str | None]:
     if isinstance(size, (int, float)) and not isinstance(size, bool):
         if not (size > 0 and math.isfinite(size)):
             raise SkatetraceError(f"size must be a positive length, got {size!r}")
-        return float(size), "model"
-    from .inputs import parse_length
+        value, unit = float(size), "model"
+    else:
+        from .inputs import parse_length
 
-    try:
-        return parse_length(str(size))
-    except SkatetraceError as exc:
-        raise SkatetraceError(f"size: {exc}") from None
+        try:
+            value, unit = parse_length(str(size))
+        except SkatetraceError as exc:
+            raise SkatetraceError(f"size: {exc}") from None
+    _check_size(value, f"size {size!r}")
+    return value, unit
 
 
-def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL) -> float:
+def _check_size(value: float, what: str) -> None:
+    if not MIN_SIZE <= value <= MAX_SIZE:
+        raise SkatetraceError(f"{what} is {value:.3g} across; a drawing must be scaled to between {MIN_SIZE:g} and "
+                              f"{MAX_SIZE:g} (metres or model units), e.g. --size 6m")
+
+
+def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL, floor: float = 0.0) -> float:
     if tol is None:
         return default * size
     if isinstance(tol, (int, float)) and not isinstance(tol, bool):
@@ -121,6 +137,9 @@ def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL) -> float
                               "give both in metres (e.g. --size 6m --tol 1mm) or both without a unit")
     if not (value > 0 and math.isfinite(value)):
         raise SkatetraceError(f"tolerance must be a positive length, got {tol!r}")
+    if value < floor * size:
+        raise SkatetraceError(f"tolerance {tol!r} is below {floor:g} of the figure's size ({floor * size:.3g} {unit}); "
+                              "for closer fits use exact mode (--exact)")
     return value
 
 
@@ -208,7 +227,9 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         unit = "model"
         notes.append(f"kept the drawing's own units ({drawing.size():.4g} across) as model units")
     fsize = drawing.size()
-    tol_v = _tol(tol, unit, fsize)
+    if value is None:
+        _check_size(fsize, f"the drawing {drawing.name!r}, in its own units,")
+    tol_v = _tol(tol, unit, fsize, floor=MIN_REL_TOL)
     fit = fit_drawing(drawing, tol_v, method=method)
     if not fit.success:
         raise SkatetraceError(f"could not fit {drawing.name!r} within {tol_v:.3g}: {fit.message}")
