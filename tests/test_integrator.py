@@ -59,11 +59,15 @@ def test_legs_and_dense_output_match_solve_ivp(t_end):
     assert res.status == 0 and res.hit is None
     assert res.nlegs == len(ref) == 3
     scale = np.abs(ref[-1].y).max()
-    np.testing.assert_allclose(res.y, ref[-1].y[:, -1], atol=1e-10 * scale)
+    # the joins are located by two different root finders, and each leg restarts from its join:
+    # under the initial state perturbed by 1e-15..1e-11 the join times differ by up to 1.7e-13
+    # and the states by 1.2e-11 x scale, so the bounds are 1e-11 and 1e-9 x scale (as for the
+    # polynomial legs below), far below what a wrong right-hand side or join would give
+    np.testing.assert_allclose(res.y, ref[-1].y[:, -1], atol=1e-9 * scale)
     for i, sol in enumerate(ref):
-        assert res.leg_bounds[i + 1] == pytest.approx(sol.t[-1], abs=1e-12)
+        assert res.leg_bounds[i + 1] == pytest.approx(sol.t[-1], abs=1e-11)
         tt = np.linspace(res.leg_bounds[i], res.leg_bounds[i + 1], 13)
-        np.testing.assert_allclose(res.legs[i](tt), sol.sol(tt), atol=1e-10 * scale)
+        np.testing.assert_allclose(res.legs[i](tt), sol.sol(tt), atol=1e-9 * scale)
     # the joins are where |s| reaches the switch lengths
     for i, sw in enumerate(switches[:-1]):
         assert abs(res.legs[i](res.leg_bounds[i + 1])[4]) == pytest.approx(sw, abs=1e-12)
