@@ -396,7 +396,7 @@ def test_first_run_says_it_compiles_once(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(compiled, "warm_up", warm_up)
     assert main(["trace", "line", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 0
     err = capsys.readouterr().err
-    assert err.count("compiling the numerical core, once (about 20 s; later runs reuse it)") == 1
+    assert err.count("compiling the numerical core, once (about 15 s; later runs reuse it)") == 1
     assert "compiling a (1/2)" in err and "compiling b (2/2)" in err and "compiled in 21 s" in err
     assert calls == [1]
     monkeypatch.setattr(compiled, "cache_is_warm", lambda: True)

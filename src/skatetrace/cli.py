@@ -218,7 +218,7 @@ def _compile_once() -> None:
 
     if cache_is_warm() is not False:
         return
-    print("skatetrace: compiling the numerical core, once (about 20 s; later runs reuse it)", file=sys.stderr,
+    print("skatetrace: compiling the numerical core, once (about 15 s; later runs reuse it)", file=sys.stderr,
           flush=True)
     seconds = warm_up(lambda part, i, n: print(f"  compiling {part} ({i}/{n})", file=sys.stderr, flush=True))
     print(f"  compiled in {seconds:.0f} s", file=sys.stderr, flush=True)

@@ -2,16 +2,17 @@
 
 The integrators (:mod:`skatetrace.integrator`, :mod:`skatetrace.replayer`, :mod:`skatetrace.dop853`) and
 the distance checks of :mod:`skatetrace.verify` are compiled by numba with ``cache=True``: the first
-run on a machine compiles them (about 20 s) and writes the machine code to numba's cache (the
-``__pycache__`` folders beside the sources, or, where those cannot be written, numba's folder in the
-user's cache directory, or ``NUMBA_CACHE_DIR``); every later run loads it in a fraction of a second.
+run on a machine compiles them (10-20 s, depending on the machine) and writes the machine code to
+numba's cache (the ``__pycache__`` folders beside the sources, or, where those cannot be written,
+numba's folder in the user's cache directory, or ``NUMBA_CACHE_DIR``); every later run loads it in
+a fraction of a second.
 The cache is keyed by the source file's time stamp and size, the function's bytecode and the CPU, so
 it is rebuilt after an upgrade or on another machine, never reused wrongly.
 
 :func:`cache_is_warm` says whether a run would load rather than compile; :func:`warm_up` compiles
 (or loads) everything a trace needs by tracing and verifying a small figure, reporting each part as
 it starts, so that a caller (the command line) can say what is happening, or an installer (a
-container build, a ``postinstall`` step) can pay the 20 s once, ahead of any real work.
+container build, a ``postinstall`` step) can pay that once, ahead of any real work.
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ def cache_is_warm() -> bool | None:
     -------
     bool or None
         ``True``: every entry point is cached for this machine (or already compiled in this process);
-        ``False``: some part would be compiled (about 20 s in all); ``None``: cannot tell (numba's cache
+        ``False``: some part would be compiled (10-20 s in all); ``None``: cannot tell (numba's cache
         internals changed, or JIT compilation is disabled with ``NUMBA_DISABLE_JIT=1``).
     """
     try:
