@@ -56,8 +56,15 @@ def _version() -> str:
         return __version__
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse whose usage errors read like every other: ``skatetrace: error: ...``, exit code 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"skatetrace: error: {message} (see '{self.prog} --help')\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="skatetrace", description="Controls that make a skater trace a figure exactly.")
+    p = _Parser(prog="skatetrace", description="Controls that make a skater trace a figure exactly.")
     p.add_argument("--version", action="version", version=f"skatetrace {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
     t = sub.add_parser("trace", help="trace a figure, verify it by re-simulation, write results")
@@ -436,6 +443,28 @@ def _figures(args) -> int:
     return 0
 
 
+def _check_values(args) -> None:
+    """Refuse bad numbers (zero, negative, NaN, infinite, out of range) before any work is done."""
+    from .tracing import SPEED_RANGE
+
+    def positive(name: str, value, upper: float = math.inf) -> None:
+        if value is not None and not (math.isfinite(value) and 0 < value <= upper):
+            bound = "" if upper == math.inf else f" at most {upper:g}"
+            raise SkatetraceError(f"{name} must be a positive finite number{bound}, got {value!r}")
+
+    if args.command not in ("trace", "fit"):
+        return
+    for name in ("height", "body_mass", "blade"):
+        positive("--" + name.replace("_", "-"), getattr(args, name))
+    if args.command == "trace":
+        for name in ("M", "m", "I"):
+            positive("--" + name, getattr(args, name))
+        positive("--verify-tol", args.verify_tol, 1.0)
+        if args.speed is not None and not SPEED_RANGE[0] <= args.speed <= SPEED_RANGE[1]:
+            raise SkatetraceError(f"--speed must lie between {SPEED_RANGE[0]:g} and {SPEED_RANGE[1]:g}, "
+                                  f"got {args.speed!r}")
+
+
 def _run(args) -> int:
     commands = {"figures": _figures, "fit": _fit, "reproduce": _reproduce, "animate": _animate, "view": _view,
                 "trace": _trace}
@@ -469,6 +498,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:
         return int(exc.code or 0)
     try:
+        _check_values(args)
         folder = _output_folder(args)  # checked before any work
         if folder is None:
             return _run(args)

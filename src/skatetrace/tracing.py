@@ -47,6 +47,10 @@ class TraceStatus(Enum):
     EXCURSION = "the mass would have to move implausibly far or the blade stall inside the section"
 
 
+#: Accepted glide speeds (model length per time unit, or m/s).
+SPEED_RANGE = (1e-6, 1e6)
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class TraceOptions:
     """Options of the exact tracer.
@@ -94,8 +98,20 @@ class TraceOptions:
     search: int = 16
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.speed) and self.speed > 0):
-            raise ValueError(f"speed must be positive and finite, got {self.speed!r}")
+        for name in ("speed", "maneuver_length", "glide_lateral", "residual_tol", "singular_limit", "excursion_limit",
+                     "rtol", "atol"):
+            value = getattr(self, name)
+            if value is None and name in ("maneuver_length", "glide_lateral"):
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ValueError(f"{name} must be a number, got {value!r}")
+            if not math.isfinite(value):
+                raise ValueError(f"{name} must be finite, got {value!r}")
+        # Durations scale as 1 / speed; far outside this range they under- or overflow the
+        # absolute time steps of the integrators (at 1e100 a replay divides by zero).
+        if not (SPEED_RANGE[0] <= self.speed <= SPEED_RANGE[1]):
+            raise ValueError(f"speed must lie between {SPEED_RANGE[0]:g} and {SPEED_RANGE[1]:g} (positive), "
+                             f"got {self.speed!r}")
         if self.maneuver_length is not None and not (math.isfinite(self.maneuver_length) and self.maneuver_length > 0):
             raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
         if not (isinstance(self.search, int) and self.search >= 0):

@@ -32,6 +32,11 @@ from .tracing import FigureTrace
 
 __all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
 
+#: Bounds on the dense samples of the replay and of the figure, so that memory stays bounded for
+#: any figure size and speed (figures of ordinary size and duration stay far below them).
+MAX_REPLAY_SAMPLES = 2_000_000
+MAX_FIGURE_SAMPLES = 2_000_000
+
 
 _SAMPLED = ("a", "b", "adot", "bdot", "p1", "p2", "s", "xi1", "xi2", "segment")
 
@@ -128,6 +133,11 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
     ts, states, ctrls, secs, pieces = [], [], [], [], []
     y = None
     prev_section = None
+    # Memory is bounded whatever the time scale (a slow --speed or a long figure): beyond
+    # MAX_REPLAY_SAMPLES in all the density drops below points_per_unit.
+    span = float(schedule.t[-1] - schedule.t[0]) if schedule.t.size else 0.0
+    if span * points_per_unit > MAX_REPLAY_SAMPLES:
+        points_per_unit = MAX_REPLAY_SAMPLES / span
     for i0, i1 in schedule.chunks():
         si = int(schedule.section[i0])
         sec = trace.sections[si]
@@ -359,6 +369,8 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     sections, drifts, cusp_speeds = [], [], []
     dev_to, dev_from = 0.0, 0.0
     # each section's rows, found once (not with a mask over the whole replay per section)
+    total_length = sum(p.segment.length for sec in trace.sections for p in sec.section.pieces)
+    density = min(200.0, MAX_FIGURE_SAMPLES / max(total_length, 1e-300))  # target points per unit length
     order = np.argsort(rep.section, kind="stable")
     cuts = np.searchsorted(rep.section[order], np.arange(len(trace.sections) + 1))
     for si, sec in enumerate(trace.sections):
@@ -375,7 +387,7 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         d_from = np.zeros(0)
         for p, xy in zip(sec.section.pieces, samples):
             d_to = _nearer(d_to, pts, p, xy)
-            n = max(64, int(p.segment.length * 200))
+            n = max(64, int(p.segment.length * density))
             # Each piece's points are matched with the stretch of replay labelled with that piece
             # (one sample more each side): where two pieces pass close to each other, as at the
             # waist of a figure eight, the nearest sample may otherwise belong to the other one.
