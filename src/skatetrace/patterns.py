@@ -93,6 +93,6 @@ def pattern_names() -> list[str]:
 def pattern(name: str) -> Figure:
     """A built-in figure by name (see :func:`pattern_names`)."""
     table = _builtins()
-    if name not in table:
+    if not isinstance(name, str) or name not in table:
         raise FigureFormatError(f"unknown figure {name!r}; built-in figures are {', '.join(sorted(table))}")
     return table[name]()

@@ -445,7 +445,14 @@ def _choice(value, valid: tuple[str, ...], what: str) -> str:
 def _length(value, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value > 0):
         raise FigureFormatError(f"{what} must be a positive length in metres, got {value!r}")
+    if not _LENGTH_RANGE[0] <= value <= _LENGTH_RANGE[1]:
+        raise FigureFormatError(f"{what} must lie between {_LENGTH_RANGE[0]:g} and {_LENGTH_RANGE[1]:g} m, got {value!r}")
     return float(value)
+
+
+#: Heights, blades and turn radii accepted (metres): far outside, the figure's pieces would leave
+#: the limits of :mod:`skatetrace.figure` and the message would name a piece instead of the cause.
+_LENGTH_RANGE = (1e-3, 1e3)
 
 
 def school_figure(name: str, *, height: float = 1.7, blade: float = BLADE, edge: str = "outside",
@@ -494,7 +501,7 @@ def school_figure(name: str, *, height: float = 1.7, blade: float = BLADE, edge:
     'RFI three RBO | LBO three LFI'
     """
     key = name.strip().lower().replace(" ", "-").replace("_", "-") if isinstance(name, str) else name
-    if key not in _FIGURES:
+    if not isinstance(key, str) or key not in _FIGURES:
         raise FigureFormatError(f"unknown school figure {name!r}; valid names are {', '.join(_FIGURES)}")
     edge = _choice(edge, EDGES, "edge")
     direction = _choice(direction, DIRECTIONS, "direction")
