@@ -445,6 +445,7 @@ def _figures(args) -> int:
 
 def _check_values(args) -> None:
     """Refuse bad numbers (zero, negative, NaN, infinite, out of range) before any work is done."""
+    from .figure import PARAM_RANGE
     from .tracing import SPEED_RANGE
 
     def positive(name: str, value, upper: float = math.inf) -> None:
@@ -454,11 +455,14 @@ def _check_values(args) -> None:
 
     if args.command not in ("trace", "fit"):
         return
-    for name in ("height", "body_mass", "blade"):
-        positive("--" + name.replace("_", "-"), getattr(args, name))
+    for name, upper in (("height", 1e3), ("body_mass", 1e6), ("blade", 1e3)):
+        positive("--" + name.replace("_", "-"), getattr(args, name), upper)
     if args.command == "trace":
         for name in ("M", "m", "I"):
-            positive("--" + name, getattr(args, name))
+            value = getattr(args, name)
+            if value is not None and not PARAM_RANGE[0] <= value <= PARAM_RANGE[1]:
+                raise SkatetraceError(f"--{name} must lie between {PARAM_RANGE[0]:g} and {PARAM_RANGE[1]:g}, "
+                                      f"got {value!r}")
         positive("--verify-tol", args.verify_tol, 1.0)
         if args.speed is not None and not SPEED_RANGE[0] <= args.speed <= SPEED_RANGE[1]:
             raise SkatetraceError(f"--speed must lie between {SPEED_RANGE[0]:g} and {SPEED_RANGE[1]:g}, "

@@ -44,6 +44,9 @@ MAX_ARC_TURN = 1e6
 #: Largest turn of the heading along one spiral (radians): its layout integrates the heading on
 #: cells of 0.2 rad each, so this bounds the work per spiral.
 MAX_SPIRAL_TURN = 1e4
+#: Model parameters M, m, I a figure (or the command line) may ask for: within this range every
+#: built-in figure traces or fails as data; at 1e300 the tracer's integrator divides by zero.
+PARAM_RANGE = (1e-6, 1e6)
 
 
 def _is_real(value) -> bool:
@@ -496,6 +499,10 @@ def figure_from_dict(data: Any) -> Figure:
             params = SleighParams(**p)
         except (TypeError, ValueError) as exc:
             raise FigureFormatError(f"'params': {exc}") from None
+        for key, value in params.to_dict().items():
+            if not PARAM_RANGE[0] <= value <= PARAM_RANGE[1]:
+                raise FigureFormatError(f"'params': {key} must lie between {PARAM_RANGE[0]:g} and {PARAM_RANGE[1]:g}, "
+                                        f"got {value!r}")
     curves, total = [], 0
     for ci, c in enumerate(curves_in):
         where = f"curves[{ci}]"
