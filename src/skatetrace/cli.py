@@ -457,6 +457,15 @@ def _check_values(args) -> None:
         return
     for name, upper in (("height", 1e3), ("body_mass", 1e6), ("blade", 1e3)):
         positive("--" + name.replace("_", "-"), getattr(args, name), upper)
+    lengths = [("--size", args.size), ("--tol", args.tol), ("--exact", None if args.exact is True else args.exact)]
+    if any(value is not None for _, value in lengths):  # checked for every figure, not only drawings
+        from .inputs import parse_length
+
+        for name, value in lengths:
+            try:
+                value is None or parse_length(value)
+            except SkatetraceError as exc:
+                raise SkatetraceError(f"{name}: {exc}") from None
     if args.command == "trace":
         for name in ("M", "m", "I"):
             value = getattr(args, name)

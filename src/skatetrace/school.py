@@ -443,7 +443,7 @@ def _choice(value, valid: tuple[str, ...], what: str) -> str:
 
 
 def _length(value, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value > 0):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (0 < value <= 1e300 and math.isfinite(value)):
         raise FigureFormatError(f"{what} must be a positive length in metres, got {value!r}")
     if not _LENGTH_RANGE[0] <= value <= _LENGTH_RANGE[1]:
         raise FigureFormatError(f"{what} must lie between {_LENGTH_RANGE[0]:g} and {_LENGTH_RANGE[1]:g} m, got {value!r}")

@@ -105,7 +105,7 @@ class TraceOptions:
                 continue
             if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
                 raise ValueError(f"{name} must be a number, got {value!r}")
-            if not math.isfinite(value):
+            if not (abs(value) <= 1e300 and math.isfinite(value)):  # a huge int would overflow isfinite
                 raise ValueError(f"{name} must be finite, got {value!r}")
         # Durations scale as 1 / speed; far outside this range they under- or overflow the
         # absolute time steps of the integrators (at 1e100 a replay divides by zero).
