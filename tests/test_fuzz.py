@@ -207,6 +207,7 @@ def _one(*pieces, **curve):
     (_one({"type": "spiral", "curvature": [0, 0, 0, 1e300], "length": 1e3}), r"spiral may turn"),  # OverflowError
     ({"curves": [{"centre": [1e308, -1e308], "repeat": 2, "pieces": [_arc(1, 90)]}]}, r"within 1e\+09"),  # NaN layout
     ({"params": {"M": 2, "m": 1, "I": 1e300}, "curves": [{"pieces": [_arc(1, 90)]}]}, r"I must lie between"),
+    ({"params": {"M": 10**400}, "curves": [{"pieces": [_arc(1, 90)]}]}, r"must lie between"),  # OverflowError
     (_one({"type": "line", "length": [1] * 10_000}), r"must be a finite number, got \[1, 1, 1, 1, 1, 1, \.\.\.\]"),
 ])
 def test_figure_errors(data, match):
@@ -223,6 +224,11 @@ def test_figure_file_errors(tmp_path, content, match):
     path.write_bytes(content)
     with pytest.raises(FigureFormatError, match=match):
         st.load_figure(path)
+
+
+def test_figure_file_name_with_nul():
+    with pytest.raises(FigureFormatError, match=r"no file name"):
+        st.load_figure("fig\x00.json")  # ValueError: embedded null byte
 
 
 @pytest.mark.parametrize("build, exc, match", [
@@ -349,11 +355,13 @@ def test_fuzz_lengths(text):
     ("path", "L 1 1", r"does not begin with a moveto"),
     ("svg", '<svg xmlns="http://www.w3.org/2000/svg"><path d="z m 0 0 l 1 1"/></svg>', r"moveto"),
     ("length", "5e-324 mm", r"which is 0 in metres"),  # returned 0.0 m
+    ("points", "\x00", r"no file name"),  # ValueError: embedded null byte
+    ("svg", "a\x00b", r"no file name"),
 ])
 def test_drawing_errors(read, source, match):
     from skatetrace.inputs import parse_path_string
 
-    fn = {"path": parse_path_string, "svg": st.read_svg, "length": st.parse_length}[read]
+    fn = {"path": parse_path_string, "svg": st.read_svg, "length": st.parse_length, "points": st.read_points}[read]
     with pytest.raises(DrawingError, match=match):
         fn(source)
 

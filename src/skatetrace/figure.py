@@ -499,6 +499,9 @@ def figure_from_dict(data: Any) -> Figure:
             params = SleighParams(**p)
         except (TypeError, ValueError) as exc:
             raise FigureFormatError(f"'params': {exc}") from None
+        except OverflowError:  # an integer too large for a float
+            raise FigureFormatError(f"'params': M, m and I must lie between {PARAM_RANGE[0]:g} and "
+                                    f"{PARAM_RANGE[1]:g}, got {_show(p)}") from None
         for key, value in params.to_dict().items():
             if not PARAM_RANGE[0] <= value <= PARAM_RANGE[1]:
                 raise FigureFormatError(f"'params': {key} must lie between {PARAM_RANGE[0]:g} and {PARAM_RANGE[1]:g}, "
@@ -559,6 +562,8 @@ def load_figure(path: str | Path) -> Figure:
         raise FigureFormatError(f"cannot read figure file {str(path)!r}: {exc.strerror}") from None
     except UnicodeDecodeError as exc:
         raise FigureFormatError(f"{path}: not a text file in UTF-8 (byte {exc.start}); a figure is JSON text") from None
+    except ValueError:  # a NUL character in the name
+        raise FigureFormatError(f"{_show(str(path))} is no file name (it holds a NUL character)") from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:

@@ -225,6 +225,9 @@ def _read_bytes(file_name: str, kind: str) -> bytes:
         raise DrawingError(f"{kind} file not found: {file_name!r} (current directory {os.getcwd()!r})") from None
     except OSError as exc:
         raise DrawingError(f"cannot read {kind} file {file_name!r}: {exc.strerror or exc}") from exc
+    except ValueError:  # a NUL character: no file can have that name
+        raise DrawingError(f"{_shorten(repr(file_name))} is no file name (it holds a NUL character); give a "
+                           f"{kind} file, or its text over more than one line") from None
 
 
 def _stem(file_name: str) -> str:
