@@ -4,6 +4,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 from scipy.interpolate import CubicHermiteSpline
 
 from skatetrace.cli import main
@@ -151,6 +152,7 @@ def test_trace_writes_the_viewer_and_view_rewrites_it(tmp_path, capsys):
     assert main(["view", str(tmp_path / "nothing")]) == 2
 
 
+@pytest.mark.slow
 def test_double_flower_gif_and_mp4_at_the_defaults(tmp_path, capsys):
     # issue 5's acceptance: both videos of the double flower from the CLI, full length and size
     import imageio_ffmpeg
@@ -176,7 +178,6 @@ import os
 import stat
 from pathlib import Path
 
-import pytest
 
 import skatetrace
 from skatetrace import cli

@@ -209,6 +209,7 @@ def test_plot_endpoints(evs):
     assert len(figures.plot_endpoints(pairs[:2]).axes) == 2
 
 
+@pytest.mark.slow
 def test_save_paper_figures(evs, tmp_path):
     def res(key, exact):
         row, pub = evs[key]

@@ -17,6 +17,8 @@ from skatetrace.paper.conditioning import (  # noqa: E402
 from skatetrace.paper.report import reproduce, strict_json, write_report  # noqa: E402
 from skatetrace.paper.tables import paper_row  # noqa: E402
 
+pytestmark = pytest.mark.slow  # the paper's nine rows, three ways: the quick subset leaves them out
+
 # Two perturbed runs instead of seven keep the suite fast; the machinery is the same.
 FEW = perturbations(rtols=(1e-10,), seeds=(1,))
 
