@@ -460,9 +460,9 @@ def test_cli_bad_numbers_exit_2_before_work(option, value, tmp_path, capsys, no_
 
 
 @pytest.mark.parametrize("args, match", [
-    (["trace", "circle", "--speed", "1e300"], r"--speed must lie between"),  # ZeroDivisionError in the replay
-    (["trace", "circle", "--speed", "1e-300"], r"--speed must lie between"),  # "Maximum allowed size exceeded"
-    (["trace", "circle", "--I", "1e300"], r"--I must lie between"),  # ZeroDivisionError in the tracer
+    (["trace", "circle", "--speed", "1e300"], r"--speed must be a positive number between"),  # ZeroDivisionError in the replay
+    (["trace", "circle", "--speed", "1e-300"], r"--speed must be a positive number between"),  # "Maximum allowed size exceeded"
+    (["trace", "circle", "--I", "1e300"], r"--I must be a positive number between"),  # ZeroDivisionError in the tracer
     (["trace", "circle", "--verify-tol", "nan"], r"--verify-tol must be a positive finite"),  # NaN passed verify
     (["trace", "circle", "--rests", "bogus"], r"argument --rests: invalid choice"),  # was argparse's usage text
     (["trace", "circle", "--size", "abc"], r"--size: cannot read the length 'abc'"),  # was ignored

@@ -470,12 +470,12 @@ def _check_values(args) -> None:
         for name in ("M", "m", "I"):
             value = getattr(args, name)
             if value is not None and not PARAM_RANGE[0] <= value <= PARAM_RANGE[1]:
-                raise SkatetraceError(f"--{name} must lie between {PARAM_RANGE[0]:g} and {PARAM_RANGE[1]:g}, "
-                                      f"got {value!r}")
+                raise SkatetraceError(f"--{name} must be a positive number between {PARAM_RANGE[0]:g} and "
+                                      f"{PARAM_RANGE[1]:g}, got {value!r}")
         positive("--verify-tol", args.verify_tol, 1.0)
         if args.speed is not None and not SPEED_RANGE[0] <= args.speed <= SPEED_RANGE[1]:
-            raise SkatetraceError(f"--speed must lie between {SPEED_RANGE[0]:g} and {SPEED_RANGE[1]:g}, "
-                                  f"got {args.speed!r}")
+            raise SkatetraceError(f"--speed must be a positive number between {SPEED_RANGE[0]:g} and "
+                                  f"{SPEED_RANGE[1]:g}, got {args.speed!r}")
 
 
 def _run(args) -> int:
