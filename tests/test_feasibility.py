@@ -241,3 +241,4 @@ def test_cli_warns_and_writes_both_verdicts(tmp_path, capsys):
     html = (out / "viewer.html").read_text()
     assert 'class="badge warn"' in html and "not humanly feasible" in html
     assert "⚠ beyond" in html and "feasible: reach" in html
+

@@ -3,6 +3,7 @@
 import importlib
 
 import numpy as np
+import pytest
 
 from skatetrace.model import SleighParams
 
@@ -90,3 +91,15 @@ def test_distance_search_matches_a_brute_force_minimum():
     # the fine grid (1e-7 of an interval) overestimates by far less than 1e-13 at these distances
     assert np.all(d <= brute + 1e-15)
     np.testing.assert_allclose(d, brute, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("rel_tol", [float("nan"), 0.0, -1e-6, 2.0, "1e-6", True])
+def test_a_tolerance_that_would_pass_everything_is_refused(rel_tol):
+    # deviation > NaN is False: a NaN tolerance would have verified anything
+    import skatetrace as st
+
+    fig = st.pattern("line")
+    with pytest.raises(ValueError, match=r"rel_tol must be a number in \(0, 1\]"):
+        st.trace_and_verify(fig, rel_tol=rel_tol)
+    with pytest.raises(ValueError, match=r"rel_tol must be a number in \(0, 1\]"):
+        st.verify(st.trace_figure(fig), rel_tol=rel_tol)

@@ -139,6 +139,9 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     """
     if rests not in REST_POLICIES:
         raise ValueError(f"rests must be one of {', '.join(REST_POLICIES)}, got {rests!r}")
+    if isinstance(rel_tol, bool) or not isinstance(rel_tol, (int, float, np.integer, np.floating)) \
+            or not 0.0 < rel_tol <= 1.0:
+        raise ValueError(f"rel_tol must be a number in (0, 1] (a fraction of the figure's size), got {rel_tol!r}")
     if not (isinstance(max_rounds, int) and max_rounds >= 0):
         raise ValueError(f"max_rounds must be a whole number >= 0, got {max_rounds!r}")
     added: list[tuple[int, int]] = _all_smooth_joins(figure) if rests == "joins" else []

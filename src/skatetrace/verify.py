@@ -356,8 +356,16 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     Parameters
     ----------
     rel_tol : float
-        Allowed deviation from the figure as a fraction of the figure's size.
+        Allowed deviation from the figure as a fraction of the figure's size, in (0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``rel_tol`` is not a number in (0, 1] (a NaN tolerance would pass every check).
     """
+    if isinstance(rel_tol, bool) or not isinstance(rel_tol, (int, float, np.integer, np.floating)) \
+            or not 0.0 < rel_tol <= 1.0:
+        raise ValueError(f"rel_tol must be a number in (0, 1] (a fraction of the figure's size), got {rel_tol!r}")
     if schedule is None:
         schedule, _ = schedule_from_trace(trace)
     params = trace.params
