@@ -1,6 +1,19 @@
-"""Suite-wide settings: what the quick subset (``python -m pytest -m "not slow"``) leaves out."""
+"""Suite-wide settings: what the quick subset (``python -m pytest -m "not slow"``) leaves out, and
+hypothesis's profile.
+
+On CI (``CI=true``) hypothesis draws its examples from a fixed seed (``derandomize``), so that a
+submission's CI never turns red on a new random draw; fuzzing with fresh draws happens on every
+developer's run (``--hypothesis-seed`` repeats one), where what it finds becomes a regression test.
+"""
+
+import os
 
 import pytest
+from hypothesis import settings
+
+settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("CI"):
+    settings.load_profile("ci")
 
 
 def pytest_collection_modifyitems(items):

@@ -292,10 +292,15 @@ def _trace(args) -> int:
         cl = c.closure()
         print(f"curve {c.name}: {'closed' if cl['closed'] else 'open'} (end-to-start gap {cl['position_gap']:.2e}, "
               f"heading gap {cl['heading_gap']:.2e} rad)")
-    print(f"max deviation from the traced pieces {report.max_deviation:.3e} {unit} (tolerance "
-          f"{report.tolerance:.3e}, figure size {report.figure_size:.4g}); max cusp speed {report.max_cusp_speed:.3e}")
+    replayed = schedule.t.size > 0
+    if replayed:
+        print(f"max deviation from the traced pieces {report.max_deviation:.3e} {unit} (tolerance "
+              f"{report.tolerance:.3e}, figure size {report.figure_size:.4g}); max cusp speed "
+              f"{report.max_cusp_speed:.3e}")
+    else:
+        print("nothing was replayed: no section could be traced")
     ok = trace.success and report.success
-    if res.fit is not None:
+    if res.fit is not None and replayed:
         size = report.figure_size
         if res.exact is not None:
             bound = res.exact.deviation + report.max_deviation
