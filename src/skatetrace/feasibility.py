@@ -215,7 +215,10 @@ CHECK_TITLES = {
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class FeasibilityCheck:
-    """One measured quantity against its human limit; ``time`` and ``section`` say where it peaks."""
+    """One measured quantity against its human limit; ``time`` and ``section`` say where it peaks.
+
+    ``time`` is ``None`` where it is not known (the singular approach is the tracer's, per section).
+    """
 
     name: str
     description: str  # with "{value}" where the number goes
@@ -412,8 +415,7 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
     checks.append(FeasibilityCheck(
         name="singular_approach", description="mass passes {value} from the singular point", value=value,
         limit=limits.singular_distance, unit=L, passed=bool(value >= limits.singular_distance),
-        time=float(trace.start_times[k]) if trace.sections and math.isfinite(value) else None,
-        section=k if trace.sections and math.isfinite(value) else None))
+        time=None, section=k if trace.sections and math.isfinite(value) else None))  # the tracer keeps no time
 
     ke = 0.5 * params.m * (VX * VX + VY * VY)
     info = {"peak_mass_kinetic_energy": float(np.max(ke)) if n else 0.0, "energy_unit": E,
