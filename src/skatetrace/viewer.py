@@ -258,7 +258,8 @@ def _feasibility_rows(feas: Any) -> list[dict[str, Any]]:
             continue
         unit = f" {c['unit']}" if c.get("unit") else ""
         sign = "≥" if c.get("name") == "singular_approach" else "≤"
-        where = "" if c.get("section") is None else f" (worst in section {c['section']}, t = {_number(c.get('time'))})"
+        where = "" if c.get("section") is None else f" (worst in section {c['section']}" + \
+            ("" if c.get("time") is None else f", t = {_number(c.get('time'))}") + ")"
         title = str(c.get("title") or str(c.get("name", "")).replace("_", " "))
         rows.append({"name": f"feasible: {title}", "value": _number(c.get("value"), ".3g") + unit,
                      "limit": f"{sign} {_number(c.get('limit'), '.3g')}{unit}{where}",
