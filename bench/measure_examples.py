@@ -8,7 +8,7 @@ the README's block to ``render(bench/examples.json)``.
 
 Usage::
 
-    python bench/measure_examples.py            # all examples (about 10 minutes on 2 cores)
+    python bench/measure_examples.py            # all examples (a few minutes on 2 cores)
     python bench/measure_examples.py --only double-flower,school-three
     python bench/measure_examples.py --render   # only rewrite README.md from bench/examples.json
 
@@ -46,6 +46,8 @@ EXAMPLES = {
     "points-eight-csv": (["examples/points-eight.csv", "--size", "6m", "--tol", "1mm"], "point list, 6 m, 1 mm"),
     "figure-eight-exact": (["examples/figure-eight.svg", "--size", "6m", "--exact"], "SVG, exact mode"),
     "serpentine-exact": (["examples/serpentine.svg", "--size", "6m", "--exact"], "SVG, exact mode"),
+    "three-turn-exact": (["examples/three-turn.svg", "--size", "6m", "--exact"], "SVG, exact mode"),
+    "points-eight-exact": (["examples/points-eight.csv", "--size", "6m", "--exact"], "point list, exact mode"),
 }
 
 
@@ -110,7 +112,7 @@ def render(data: dict) -> str:
             fit = f"splines ≤ {_bound(r['exact_bound'])}{unit}"
         elif r.get("fit_bound") is not None:
             fit = f"arcs ≤ {_bound(r['fit_bound'])}{unit}"
-        dev = (f"≤ {_bound(r['max_deviation'])}{unit} ({_bound(r['tolerance'])})" if r.get("max_deviation") is not None
+        dev = (f"≤ {_bound(r['max_deviation'])}{unit} ({_two(r['tolerance'])})" if r.get("max_deviation") is not None
                else "–")
         reach = (f"{_two(r['reach'])}{unit} ({_two(r['reach_limit'])})" if r.get("reach") is not None else "–")
         verdict = {True: "verified · feasible", False: "verified · not feasible"}.get(r.get("feasible"), "–") \

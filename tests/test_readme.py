@@ -88,3 +88,27 @@ def test_the_main_job_does_not_import_the_test_extras(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code, str(tmp_path / "o")], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (tmp_path / "o" / "viewer.html").is_file() and (tmp_path / "o" / "figure.png").is_file()
+
+
+def test_the_examples_table_is_the_scripts_output():
+    # The README's measured figures come from bench/measure_examples.py, never by hand.
+    import importlib.util
+    import json
+
+    spec = importlib.util.spec_from_file_location("measure_examples", ROOT / "bench" / "measure_examples.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    data = json.loads((ROOT / "bench" / "examples.json").read_text(encoding="utf-8"))
+    block = README[README.index(module.BEGIN) + len(module.BEGIN):README.index(module.END)]
+    assert block.strip() == module.render(data).strip()
+    assert {r["name"] for r in data["rows"]} == set(module.EXAMPLES)
+
+
+def test_bounds_round_up_to_one_digit():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("measure_examples", ROOT / "bench" / "measure_examples.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert [module._bound(x) for x in (3.39e-9, 1e-9, 9.01e-10, 0.0253, 2.0, None)] == \
+        ["4e-9", "1e-9", "1e-9", "0.03", "2", "–"]
