@@ -29,6 +29,7 @@ import numpy as np
 
 from .controls import ControlSchedule
 from .errors import SkatetraceError
+from .feasibility import Feasibility
 from .tracing import FigureTrace
 from .verify import VerificationReport
 
@@ -192,7 +193,7 @@ def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
 
 def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,
                   states: dict[str, np.ndarray], report: VerificationReport | None, unit: str = "model",
-                  feasibility: "Feasibility | None" = None) -> list[Path]:
+                  feasibility: Feasibility | None = None) -> list[Path]:
     """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``.
 
     ``unit`` (``"m"`` or ``"model"``) is recorded in ``result.json`` for the readers of the files.
@@ -201,7 +202,7 @@ def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule
     """
     out = Path(out)
     written = []
-    atomic_write(out / "result.json", json.dumps({**result_dict(trace), "unit": unit}, indent=2, allow_nan=False))
+    atomic_write(out / "result.json", dumps_json({**result_dict(trace), "unit": unit}))
     written.append(out / "result.json")
     atomic_write(out / "controls.csv", _csv_text(schedule, states))
     written.append(out / "controls.csv")
@@ -210,7 +211,7 @@ def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule
         if feasibility is not None:
             data["verdict"] = feasibility.verdict(bool(report.success and trace.success))
             data["feasibility"] = feasibility.to_dict()
-        atomic_write(out / "report.json", json.dumps(_clean(data), indent=2, allow_nan=False))
+        atomic_write(out / "report.json", dumps_json(data))
         written.append(out / "report.json")
     return written
 
