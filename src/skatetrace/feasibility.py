@@ -59,7 +59,7 @@ from typing import Any
 import numpy as np
 
 from .controls import ControlSchedule
-from .model import SleighParams
+from .model import SleighParams, mass_energy, mass_velocity
 
 __all__ = ["CHECK_TITLES", "PAPER_FIGURE_SIZE", "HumanLimits", "FeasibilityCheck", "Feasibility", "assess_feasibility", "exported_peaks"]
 
@@ -299,8 +299,7 @@ def _finite(x: float) -> float | None:
 def _mass_on_ice(a, b, theta, x, y, xi1, xi2, adot, bdot):
     """Position and velocity of the moving mass on the ice (PHYSICS.md, Energies)."""
     c, s = np.cos(theta), np.sin(theta)
-    u = xi2 - xi1 * b + adot  # body-frame velocity of the mass
-    w = xi1 * a + bdot
+    u, w = mass_velocity(xi1, xi2, a, b, adot, bdot)  # in the body frame
     return x + a * c - b * s, y + a * s + b * c, u * c - w * s, u * s + w * c
 
 
@@ -317,9 +316,7 @@ def exported_peaks(schedule: ControlSchedule, states: dict[str, np.ndarray], par
     Returns one dict per section (empty for a section with no rows), with the keys of the
     tracer's metrics: ``max_abs_a, max_abs_b, peak_abs_adot, peak_abs_bdot, peak_mass_kinetic_energy``.
     """
-    _, _, vx, vy = _mass_on_ice(schedule.a, schedule.b, states["theta"], states["x"], states["y"],
-                                states["xi1"], states["xi2"], schedule.adot, schedule.bdot)
-    ke = 0.5 * params.m * (vx * vx + vy * vy)
+    ke = mass_energy(params, states["xi1"], states["xi2"], schedule.a, schedule.b, schedule.adot, schedule.bdot)
     cols = {"max_abs_a": np.abs(schedule.a), "max_abs_b": np.abs(schedule.b), "peak_abs_adot": np.abs(schedule.adot),
             "peak_abs_bdot": np.abs(schedule.bdot), "peak_mass_kinetic_energy": ke}
     out: list[dict[str, float]] = [{} for _ in range(n_sections)]
@@ -417,7 +414,7 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
         limit=limits.singular_distance, unit=L, passed=bool(value >= limits.singular_distance),
         time=None, section=k if trace.sections and math.isfinite(value) else None))  # the tracer keeps no time
 
-    ke = 0.5 * params.m * (VX * VX + VY * VY)
+    ke = mass_energy(params, xi1, xi2, a, b, adot, bdot)
     info = {"peak_mass_kinetic_energy": float(np.max(ke)) if n else 0.0, "energy_unit": E,
             "peak_force_on_mass": float(params.m * np.max(acc)) if n else 0.0,
             "force_limit": float(params.m * limits.mass_acceleration), "force_unit": F,

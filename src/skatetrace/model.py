@@ -28,6 +28,7 @@ __all__ = [
     "momenta",
     "rhs",
     "skate_energy",
+    "mass_velocity",
     "mass_energy",
     "curvature_coefficients",
     "singular_point",
@@ -118,8 +119,7 @@ def momenta(params: SleighParams, xi1, xi2, a, b, adot, bdot):
     ``xi2``. At rest (``xi1 = xi2 = 0``) they are the momenta of the mass's own motion.
     """
     M, m, I = params.M, params.m, params.I
-    u = xi2 - xi1 * b + adot  # mass velocity along e1
-    w = xi1 * a + bdot  # mass velocity along e2
+    u, w = mass_velocity(xi1, xi2, a, b, adot, bdot)
     p1 = I * xi1 + m * (a * w - b * u)
     p2 = M * xi2 + m * u
     return p1, p2
@@ -156,13 +156,20 @@ def skate_energy(params: SleighParams, xi1, xi2):
     return 0.5 * params.M * xi2 * xi2 + 0.5 * params.I * xi1 * xi1
 
 
-def mass_energy(params: SleighParams, xi1, xi2, a, b, adot, bdot):
-    """Kinetic energy of the moving mass, ``m [(xi2 - xi1 b + adot)^2 + (xi1 a + bdot)^2] / 2``.
+def mass_velocity(xi1, xi2, a, b, adot, bdot):
+    """Velocity of the moving mass on the ice, in the body frame: ``(xi2 - xi1 b + adot, xi1 a + bdot)``.
 
-    The paper's eq. (vec_vm) writes ``e1`` twice; the second component is along ``e2``.
+    The blade's velocity ``xi2 e1``, the rotation ``xi1`` carrying the mass at ``(a, b)``, and the
+    mass's own motion ``(adot, bdot)`` relative to the body. The paper's eq. (vec_vm) writes ``e1``
+    twice; the second component is along ``e2``.
     """
-    u = xi2 - xi1 * b + adot
-    w = xi1 * a + bdot
+    return xi2 - xi1 * b + adot, xi1 * a + bdot
+
+
+def mass_energy(params: SleighParams, xi1, xi2, a, b, adot, bdot):
+    """Kinetic energy of the moving mass, ``m [(xi2 - xi1 b + adot)^2 + (xi1 a + bdot)^2] / 2``
+    (:func:`mass_velocity`)."""
+    u, w = mass_velocity(xi1, xi2, a, b, adot, bdot)
     return 0.5 * params.m * (u * u + w * w)
 
 
