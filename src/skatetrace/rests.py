@@ -28,7 +28,7 @@ from .feasibility import Feasibility, HumanLimits, assess_feasibility, exported_
 from .figure import Figure, Section
 from .model import SleighParams
 from .tracing import FigureTrace, TraceOptions, trace_figure
-from .verify import VerificationReport, schedule_from_trace, verify
+from .verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
 
 __all__ = ["REST_POLICIES", "VerifiedTrace", "add_rests", "middle_join", "trace_and_verify"]
 
@@ -139,9 +139,7 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     """
     if rests not in REST_POLICIES:
         raise ValueError(f"rests must be one of {', '.join(REST_POLICIES)}, got {rests!r}")
-    if isinstance(rel_tol, bool) or not isinstance(rel_tol, (int, float, np.integer, np.floating)) \
-            or not 0.0 < rel_tol <= 1.0:
-        raise ValueError(f"rel_tol must be a number in (0, 1] (a fraction of the figure's size), got {rel_tol!r}")
+    check_rel_tol(rel_tol)  # before the tracing, not after it
     if not (isinstance(max_rounds, int) and max_rounds >= 0):
         raise ValueError(f"max_rounds must be a whole number >= 0, got {max_rounds!r}")
     added: list[tuple[int, int]] = _all_smooth_joins(figure) if rests == "joins" else []

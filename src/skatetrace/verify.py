@@ -350,6 +350,14 @@ def _nearer(d: np.ndarray, pts: np.ndarray, placed, xy: np.ndarray) -> np.ndarra
     return out
 
 
+def check_rel_tol(rel_tol) -> None:
+    """Refuse a verification tolerance that is not a number in (0, 1]: ``deviation > NaN`` is False,
+    so a NaN tolerance would pass every check."""
+    if isinstance(rel_tol, bool) or not isinstance(rel_tol, (int, float, np.integer, np.floating)) \
+            or not 0.0 < rel_tol <= 1.0:
+        raise ValueError(f"rel_tol must be a number in (0, 1] (a fraction of the figure's size), got {rel_tol!r}")
+
+
 def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_tol: float = 1e-6) -> VerificationReport:
     """Replay ``trace``'s controls through the full dynamics and measure everything.
 
@@ -363,9 +371,7 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     ValueError
         If ``rel_tol`` is not a number in (0, 1] (a NaN tolerance would pass every check).
     """
-    if isinstance(rel_tol, bool) or not isinstance(rel_tol, (int, float, np.integer, np.floating)) \
-            or not 0.0 < rel_tol <= 1.0:
-        raise ValueError(f"rel_tol must be a number in (0, 1] (a fraction of the figure's size), got {rel_tol!r}")
+    check_rel_tol(rel_tol)
     if schedule is None:
         schedule, _ = schedule_from_trace(trace)
     params = trace.params
