@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from skatetrace import PAPER_PARAMS, Curve, Figure, Join, Segment, trace_figure, verify
-from skatetrace.verify import schedule_from_trace
+from skatetrace.verification.verify import schedule_from_trace
 
 KAPPA = (0.2, 2.0)  # |curvature| range of the generated arcs
 SWEEP_DEG = (30.0, 200.0)  # sweep range (degrees)
@@ -64,7 +64,7 @@ def warm_up() -> float:
 
 @contextlib.contextmanager
 def replay_timer():
-    """Time spent in ``skatetrace.verify.replay`` (integrating the full dynamics) while active.
+    """Time spent in ``skatetrace.verification.verify.replay`` (integrating the full dynamics) while active.
 
     Yields a list that collects one duration per call. ``verify`` calls the module-level ``replay``,
     which is wrapped for the duration of the block (and restored after), so ``verify`` time splits
@@ -73,8 +73,8 @@ def replay_timer():
     """
     import importlib
 
-    # the module itself: the package attribute skatetrace.verify is the function of that name
-    sv = importlib.import_module("skatetrace.verify")
+    # the module itself: the package attribute skatetrace.verification.verify is the function of that name
+    sv = importlib.import_module("skatetrace.verification.verify")
     original = sv.replay
     spent: list[float] = []
 

@@ -5,7 +5,7 @@ Run: python bench/bench_double_flower.py [N] [--cold K] [--figure NAME] [--quiet
 - warm: in this process, one untimed warm-up run (it loads or compiles numba's integrator), then N
   timed runs of trace_figure / schedule_from_trace / verify; the median of each stage and of the
   total, and each stage's share of the total; verify is split into its replay (integrating the full
-  dynamics, ``skatetrace.verify.replay``) and its checks (deviations, cusp speeds, invariants);
+  dynamics, ``skatetrace.verification.verify.replay``) and its checks (deviations, cusp speeds, invariants);
 - cold: K runs of ``python -m skatetrace.cli trace NAME --out TMP --no-plots --no-viewer`` in a new
   process each (interpreter start, imports, resolve, trace, verify with rests as needed, writing
   result.json, controls.csv and report.json), median wall time; beside it the time the CLI reports
@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 
 from skatetrace import pattern, trace_figure
-from skatetrace.verify import replay, schedule_from_trace
+from skatetrace.verification.verify import replay, schedule_from_trace
 
 if str(Path(__file__).resolve().parent) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -18,8 +18,8 @@ import warnings
 import numpy as np
 from scipy.special import fresnel
 
-from skatetrace.curves import BezierPiece, EllipticArcPiece, FunctionPiece, Path
-from skatetrace.fitting import fit_path
+from skatetrace.drawings.curves import BezierPiece, EllipticArcPiece, FunctionPiece, Path
+from skatetrace.drawings.fitting import fit_path
 
 
 def _sine():

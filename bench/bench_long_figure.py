@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 from skatetrace import trace_figure
-from skatetrace.verify import schedule_from_trace
+from skatetrace.verification.verify import schedule_from_trace
 
 if str(Path(__file__).resolve().parent) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -1,15 +1,15 @@
-"""Animations of traced figures (skatetrace.animation)."""
+"""Animations of traced figures (skatetrace.outputs.animation)."""
 
 import matplotlib
 import numpy as np
 import pytest
 from PIL import Image
 
-from skatetrace import animation
-from skatetrace.animation import AnimationOptions, animate, render_frame, render_rgb, save_still
+from skatetrace.outputs import animation
+from skatetrace.outputs.animation import AnimationOptions, animate, render_frame, render_rgb, save_still
 from skatetrace.cli import main
 from skatetrace.errors import SkatetraceError
-from skatetrace.playback import load_playback
+from skatetrace.outputs.playback import load_playback
 
 SMALL = AnimationOptions(fps=10, duration=2, size_px=(320, 240))
 

@@ -1,4 +1,4 @@
-"""The compiled core's cache: cold and warm as numba sees it (skatetrace.compiled)."""
+"""The compiled core's cache: cold and warm as numba sees it (skatetrace.cli.compiled)."""
 
 import os
 import subprocess
@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from skatetrace import compiled
+from skatetrace.cli import compiled
 
 
 def test_entry_points_are_numba_dispatchers_with_a_cache():
@@ -31,7 +31,7 @@ def test_in_this_process_after_a_trace_the_cache_is_warm():
 @pytest.mark.slow
 def test_a_fresh_cache_is_cold_then_warm_in_the_next_process(tmp_path):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
-    code = ("import sys, skatetrace.compiled as c; parts = []; print(c.cache_is_warm()); "
+    code = ("import sys, skatetrace.cli.compiled as c; parts = []; print(c.cache_is_warm()); "
             "c.warm_up(lambda p, i, n: parts.append((p, i, n))); print(len(parts), parts[0][1:] if parts else None)")
     first = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert first.stdout.split("\n")[:2] == ["False", "3 (1, 3)"]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicHermiteSpline
 
-from skatetrace.controls import sample_adaptively, sample_intervals
+from skatetrace.dynamics.controls import sample_adaptively, sample_intervals
 
 
 def _fn(t):

@@ -1,12 +1,12 @@
-"""Tests of skatetrace.deviation: the paper's deviation cost C, eq. (C_control), and its targets."""
+"""Tests of skatetrace.verification.deviation: the paper's deviation cost C, eq. (C_control), and its targets."""
 
 import math
 
 import numpy as np
 import pytest
 
-from skatetrace.deviation import DeviationCost, deviation_cost, segments_target
-from skatetrace.geometry import Pose, Segment, advance
+from skatetrace.verification.deviation import DeviationCost, deviation_cost, segments_target
+from skatetrace.figures.geometry import Pose, Segment, advance
 
 
 def _circle_path(radius, start_angle, length, n):

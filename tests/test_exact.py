@@ -8,14 +8,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from skatetrace import exact
-from skatetrace.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, Path, curvature
+from skatetrace.drawings import exact
+from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, Path, curvature
 from skatetrace.errors import FitError
-from skatetrace.exact import (ExactDrawingFit, ExactPathFit, ExactStatus, figure_from_exact, fit_exact_drawing,
+from skatetrace.drawings.exact import (ExactDrawingFit, ExactPathFit, ExactStatus, figure_from_exact, fit_exact_drawing,
                               fit_exact_path)
-from skatetrace.fitting import _split, corner_join, fit_path
-from skatetrace.geometry import Pose, Segment, Spiral, distance_to_segment, end_pose, segment_points
-from skatetrace.inputs import read_points
+from skatetrace.drawings.fitting import _split, corner_join, fit_path
+from skatetrace.figures.geometry import Pose, Segment, Spiral, distance_to_segment, end_pose, segment_points
+from skatetrace.drawings.inputs import read_points
 
 
 def ellipse_quarter():

@@ -1,4 +1,4 @@
-"""The second verdict: could a skater make the controls?  (skatetrace.feasibility)"""
+"""The second verdict: could a skater make the controls?  (skatetrace.verification.feasibility)"""
 
 from __future__ import annotations
 
@@ -11,9 +11,10 @@ import pytest
 
 import skatetrace as st
 from skatetrace.cli import main
-from skatetrace.controls import ControlSchedule
-from skatetrace.feasibility import PAPER_FIGURE_SIZE, HumanLimits, assess_feasibility, exported_peaks
-from skatetrace.io import read_controls
+from skatetrace.dynamics.controls import ControlSchedule
+from skatetrace.dynamics.presets import MOVING_FRACTION
+from skatetrace.verification.feasibility import PAPER_FIGURE_SIZE, HumanLimits, assess_feasibility, exported_peaks
+from skatetrace.outputs.io import read_controls
 
 
 def _strict(text: str):
@@ -44,7 +45,7 @@ def test_skater_limits_follow_height_and_weight():
     lim = HumanLimits.for_skater(1.7, 60.0)
     assert lim.unit == "m" and lim.reach == pytest.approx(0.85) and lim.mass_speed == 7.0
     # one body weight on the moving mass (34.2 % of the body): g / 0.342
-    assert lim.mass_acceleration == pytest.approx(9.81 / st.presets.MOVING_FRACTION)
+    assert lim.mass_acceleration == pytest.approx(9.81 / MOVING_FRACTION)
     assert lim.cusp_jump == pytest.approx(0.085) and lim.singular_distance == pytest.approx(0.0085)
     tall = HumanLimits.for_skater(2.0, 90.0, moving_mass=30.0)
     assert tall.reach == pytest.approx(1.0) and tall.mass_acceleration == pytest.approx(90 * 9.81 / 30)
@@ -176,7 +177,7 @@ def test_nothing_traced_is_not_assessed():
 def test_the_mass_velocity_on_the_ice_is_the_rate_of_its_position(flower):
     # PHYSICS.md, Energies: the mass moves on the ice at (xi2 - xi1 b + a', xi1 a + b') in the body
     # frame; differentiating its position numerically along one smooth chunk must agree.
-    from skatetrace.feasibility import _mass_on_ice
+    from skatetrace.verification.feasibility import _mass_on_ice
 
     sch, stt = flower.schedule, flower.states
     i0, i1 = sch.chunks()[0]

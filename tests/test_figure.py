@@ -1,4 +1,4 @@
-"""Tests of skatetrace.figure: the JSON form, its errors, layout, sections and closure."""
+"""Tests of skatetrace.figures.figure: the JSON form, its errors, layout, sections and closure."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from skatetrace.errors import FigureFormatError
-from skatetrace.figure import SMOOTH, Curve, Figure, Join, figure_from_dict, load_figure
-from skatetrace.geometry import Pose, Segment, advance
-from skatetrace.model import SleighParams
+from skatetrace.figures.figure import SMOOTH, Curve, Figure, Join, figure_from_dict, load_figure
+from skatetrace.figures.geometry import Pose, Segment, advance
+from skatetrace.dynamics.model import SleighParams
 
 
 def one_curve(**curve):
@@ -332,7 +332,7 @@ def test_reversal_from_json_and_direction_restored():
 
 
 def test_spiral_pieces_round_trip_and_lay_out_continuously():
-    from skatetrace.geometry import Spiral, end_pose
+    from skatetrace.figures.geometry import Spiral, end_pose
 
     data = {"curves": [{"pieces": [{"type": "spiral", "curvature": [0.2, 0.3], "length": 2.0},
                                    {"type": "arc", "curvature": 0.8, "length": 1.5},

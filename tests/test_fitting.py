@@ -11,12 +11,12 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from skatetrace import fitting
-from skatetrace.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, Path, piece_length
+from skatetrace.drawings import fitting
+from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, Path, piece_length
 from skatetrace.errors import FitError, SkatetraceError
-from skatetrace.fitting import (DrawingFit, FitStatus, PathFit, biarc, figure_from_fit, fit_drawing, fit_path,
+from skatetrace.drawings.fitting import (DrawingFit, FitStatus, PathFit, biarc, figure_from_fit, fit_drawing, fit_path,
                                 split_path)
-from skatetrace.geometry import Pose, Segment, advance, distance_to_segment
+from skatetrace.figures.geometry import Pose, Segment, advance, distance_to_segment
 
 BENCH = FsPath(__file__).resolve().parents[1] / "bench"
 TOLS = (1e-2, 1e-3, 1e-4)
@@ -406,7 +406,7 @@ def test_figure_from_drawing_and_reverse_threshold():
     ((Path((LinePiece((0.0, 0.0), (1.0, 0.0)),), closed=True), 1e-3), {}, "where the path closes"),
     ((Path((BezierPiece(((1.0, 1.0),) * 4),)), 1e-3), {}, "zero extent"),
     ((Path((FunctionPiece(lambda u: (u, np.sqrt(u - 0.5))),)), 1e-3), {}, "not finite"),
-    (("not a path", 1e-3), {}, "expected a skatetrace.curves.Path"),
+    (("not a path", 1e-3), {}, "expected a skatetrace.drawings.curves.Path"),
 ])
 def test_errors(args, kw, match):
     with np.errstate(all="ignore"), pytest.raises(FitError, match=match) as info:

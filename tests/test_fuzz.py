@@ -320,7 +320,7 @@ def _check_drawing(read, source):
 @FUZZ
 @given(path_data())
 def test_fuzz_path_data(d):
-    from skatetrace.inputs import parse_path_string
+    from skatetrace.drawings.inputs import parse_path_string
 
     _check_drawing(parse_path_string, d)
     _check_drawing(st.read_svg, f'<svg xmlns="http://www.w3.org/2000/svg"><path d="{d}"/></svg>')
@@ -359,7 +359,7 @@ def test_fuzz_lengths(text):
     ("svg", "a\x00b", r"no file name"),
 ])
 def test_drawing_errors(read, source, match):
-    from skatetrace.inputs import parse_path_string
+    from skatetrace.drawings.inputs import parse_path_string
 
     fn = {"path": parse_path_string, "svg": st.read_svg, "length": st.parse_length, "points": st.read_points}[read]
     with pytest.raises(DrawingError, match=match):
@@ -439,14 +439,14 @@ NUMERIC_OPTIONS = ["--speed", "--M", "--m", "--I", "--verify-tol", "--height", "
 @pytest.fixture
 def no_heavy_work(monkeypatch):
     """Fail the test if a trace or a fit starts: bad values must be refused before."""
-    import skatetrace.rests
-    import skatetrace.sources
+    import skatetrace.pipeline
+    import skatetrace.drawings.sources
 
     def refuse(*args, **kwargs):
         raise AssertionError("heavy work started for a bad value")
 
-    monkeypatch.setattr(skatetrace.rests, "trace_and_verify", refuse)
-    monkeypatch.setattr(skatetrace.sources, "resolve", refuse)
+    monkeypatch.setattr(skatetrace.pipeline, "trace_and_verify", refuse)
+    monkeypatch.setattr(skatetrace.drawings.sources, "resolve", refuse)
 
 
 @pytest.mark.parametrize("option", NUMERIC_OPTIONS)

@@ -1,4 +1,4 @@
-"""Tests of skatetrace.geometry: poses along arcs and lines, distances, rigid motions."""
+"""Tests of skatetrace.figures.geometry: poses along arcs and lines, distances, rigid motions."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from skatetrace.geometry import (Pose, Segment, Spiral, advance, distance_to_segment, end_pose, rigid_motion_centre,
+from skatetrace.figures.geometry import (Pose, Segment, Spiral, advance, distance_to_segment, end_pose, rigid_motion_centre,
                                  segment_points, shifted_polynomial, travel)
 
 

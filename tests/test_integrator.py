@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from skatetrace.integrator import DenseSolution, _rhs, integrate_legs
-from skatetrace.maneuver import constrained_rates, glide_state
-from skatetrace.model import SleighParams, velocities
-from skatetrace.model import rhs as model_rhs
+from skatetrace.dynamics.integrator import DenseSolution, _rhs, integrate_legs
+from skatetrace.tracing.maneuver import constrained_rates, glide_state
+from skatetrace.dynamics.model import SleighParams, velocities
+from skatetrace.dynamics.model import rhs as model_rhs
 
 P = SleighParams()
 RTOL, ATOL = 1e-12, 1e-13
@@ -306,7 +306,7 @@ def test_bad_kappas_shape_raises(kappas, switches):
 
 @pytest.mark.parametrize("t_end,stop", [(30.0, True), (-30.0, True), (1.5, False)])
 def test_final_state_is_where_integrate_legs_ends(t_end, stop):
-    from skatetrace.integrator import final_state
+    from skatetrace.dynamics.integrator import final_state
 
     y0 = _glide(1 / 1.2)
     coef = np.array([[1 / 1.2, 0.0, 0.0, 0.0], [-0.5, 0.1, 0.0, 0.0]])

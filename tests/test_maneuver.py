@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from skatetrace.integrator import _rhs
-from skatetrace.maneuver import constrained_rates, solve_stop
-from skatetrace.model import SleighParams, curvature_coefficients, rhs, velocities
+from skatetrace.dynamics.integrator import _rhs
+from skatetrace.tracing.maneuver import constrained_rates, solve_stop
+from skatetrace.dynamics.model import SleighParams, curvature_coefficients, rhs, velocities
 
 
 @pytest.mark.parametrize("params", [SleighParams(), SleighParams(M=2.3, m=1.7, I=0.9)])
@@ -54,8 +54,8 @@ def test_polish_rejects_a_duration_of_the_wrong_sign(monkeypatch):
     # candidate meets the boundary conditions, so only the sign of the duration can reject it.
     from types import SimpleNamespace
 
-    from skatetrace import maneuver
-    from skatetrace.model import SleighParams
+    from skatetrace.tracing import maneuver
+    from skatetrace.dynamics.model import SleighParams
 
     length = 1.0
     monkeypatch.setattr(maneuver, "root", lambda *a, **k: SimpleNamespace(x=np.array([1.0, -0.5])))
@@ -77,7 +77,7 @@ def test_polish_rejects_a_duration_of_the_wrong_sign(monkeypatch):
 
 def _full_scan_brackets(params, legs, glide_ab, backward=False):
     """The first bracket of each sign on the whole grid, every point integrated (the scan before issue 6)."""
-    from skatetrace import maneuver
+    from skatetrace.tracing import maneuver
 
     length = sum(ell for _, ell in legs)
     spec, acc = [], 0.0
@@ -129,7 +129,7 @@ def test_stop_is_the_first_root_of_the_full_scan_polished_to_rounding(legs, glid
 
 
 def test_mirrored_stop_is_the_launch_bit_for_bit():
-    from skatetrace.maneuver import mirrored_maneuver
+    from skatetrace.tracing.maneuver import mirrored_maneuver
 
     p = SleighParams()
     for legs, (a, b) in [([(1.0, 1.0)], (0.0, 0.3)), ([(1.25, 0.25)], (2.507964473723101, 0.0)),
@@ -147,7 +147,7 @@ def test_mirrored_stop_is_the_launch_bit_for_bit():
 
 
 def test_same_legs_compares_curvature_polynomials_and_lengths():
-    from skatetrace.maneuver import same_legs
+    from skatetrace.tracing.maneuver import same_legs
 
     assert same_legs([(1.0, 2.0)], [((1.0, -0.0, 0.0, -0.0), 2.0)])
     assert not same_legs([(1.0, 2.0)], [(1.0, 2.5)])

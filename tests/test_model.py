@@ -1,4 +1,4 @@
-"""Tests of skatetrace.model against independent derivations (see shared/PHYSICS.md)."""
+"""Tests of skatetrace.dynamics.model against independent derivations (see shared/PHYSICS.md)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from skatetrace import model
-from skatetrace.maneuver import solve_stop
-from skatetrace.model import SleighParams
+from skatetrace.dynamics import model
+from skatetrace.tracing.maneuver import solve_stop
+from skatetrace.dynamics.model import SleighParams
 
 # Non-default parameters, so that a formula that silently assumes the paper's M=2, m=1, I=3 fails.
 PARAMS = SleighParams(M=2.3, m=1.7, I=0.9)
@@ -288,7 +288,7 @@ def test_p1_plus_r_p2_is_conserved_on_arc(stop_on_arc):
     assert np.ptp(correct) <= 1e-10
     assert np.ptp(paper) > 1e-2
     # The blade really follows curvature 1/r: xi1 = xi2 / r along the solution.
-    from skatetrace.maneuver import constrained_rates
+    from skatetrace.tracing.maneuver import constrained_rates
 
     u = stop_on_arc.control(t)
     ad, bd, _ = constrained_rates(SleighParams(), 1 / r, p1, p2, a, b, u)

@@ -24,8 +24,8 @@ def test_unknown_names_raise_attribute_error():
 
 
 def test_functions_named_like_their_modules_stay_functions():
-    importlib.import_module("skatetrace.verify")
-    importlib.import_module("skatetrace.simulate")
+    importlib.import_module("skatetrace.verification.verify")
+    importlib.import_module("skatetrace.dynamics.simulate")
     from skatetrace import simulate, verify
 
     assert callable(verify) and callable(simulate)

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from skatetrace.model import SleighParams, curvature_coefficients, velocities
+from skatetrace.dynamics.model import SleighParams, curvature_coefficients, velocities
 from skatetrace.paper import (
     METHODS, PAPER_SOLVER, TIGHT_SOLVER, ArcEvaluation, CircularControl, HarmonicControl, ProcedureResult,
     ReducedOptions, b_rate_printed, control_from_params, evaluate_exact_arc, evaluate_paper_arc,

@@ -11,11 +11,11 @@ import pytest  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from skatetrace.geometry import Pose  # noqa: E402
-from skatetrace.model import SleighParams, mass_energy  # noqa: E402
+from skatetrace.figures.geometry import Pose  # noqa: E402
+from skatetrace.dynamics.model import SleighParams, mass_energy  # noqa: E402
 from skatetrace.paper import evaluate_exact_arc, evaluate_paper_arc, paper_row  # noqa: E402
 from skatetrace.paper import figures  # noqa: E402
-from skatetrace.patterns import pattern  # noqa: E402
+from skatetrace.figures.patterns import pattern  # noqa: E402
 from test_plotting import axes_without_units, legend_overlaps  # noqa: E402  (tests/ is on sys.path)
 
 GREEN, BLUE, RED, BLACK = (to_rgba(c) for c in ("tab:green", "tab:blue", "red", "black"))

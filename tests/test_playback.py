@@ -1,4 +1,4 @@
-"""Traced figures read back from their result files (skatetrace.playback)."""
+"""Traced figures read back from their result files (skatetrace.outputs.playback)."""
 
 import json
 
@@ -7,8 +7,8 @@ import pytest
 
 from skatetrace.cli import main
 from skatetrace.errors import SkatetraceError
-from skatetrace.io import read_controls
-from skatetrace.playback import load_playback
+from skatetrace.outputs.io import read_controls
+from skatetrace.outputs.playback import load_playback
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 
 from skatetrace import pattern, trace_figure, verify  # noqa: E402
-from skatetrace import plotting  # noqa: E402
+from skatetrace.outputs import plotting  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -107,7 +107,7 @@ def flower():
 @pytest.fixture(scope="module")
 def three_turn():
     """The three turn at 6 m, arc fit at 1 cm and exact mode at 1 mm (it has corners; under a second)."""
-    from skatetrace.sources import resolve
+    from skatetrace.drawings.sources import resolve
 
     return resolve(str(EXAMPLES / "three-turn.svg"), size="6m", tol="1cm", exact="1mm")
 

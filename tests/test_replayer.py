@@ -7,13 +7,13 @@ import pytest
 from scipy.interpolate import CubicHermiteSpline
 
 from skatetrace import trace_figure
-from skatetrace.controls import ControlSchedule
-from skatetrace.model import SleighParams, momenta
-from skatetrace.patterns import pattern
-from skatetrace.replayer import replay_chunk
-from skatetrace.simulate import simulate
+from skatetrace.dynamics.controls import ControlSchedule
+from skatetrace.dynamics.model import SleighParams, momenta
+from skatetrace.figures.patterns import pattern
+from skatetrace.dynamics.replayer import replay_chunk
+from skatetrace.dynamics.simulate import simulate
 
-verify_module = importlib.import_module("skatetrace.verify")  # the package exports the function as verify
+verify_module = importlib.import_module("skatetrace.verification.verify")  # the package exports the function as verify
 
 
 def _schedule(t, a, b, adot, bdot):

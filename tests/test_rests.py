@@ -7,13 +7,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from skatetrace import rests as rests_module
+from skatetrace import pipeline as rests_module
 from skatetrace.errors import FigureFormatError
-from skatetrace.figure import REST, SMOOTH, Curve, Figure, Join
-from skatetrace.geometry import Pose, Segment
-from skatetrace.presets import skater_params
-from skatetrace.rests import add_rests, middle_join, trace_and_verify
-from skatetrace.tracing import TraceOptions
+from skatetrace.figures.figure import REST, SMOOTH, Curve, Figure, Join
+from skatetrace.figures.geometry import Pose, Segment
+from skatetrace.dynamics.presets import skater_params
+from skatetrace.pipeline import add_rests, middle_join, trace_and_verify
+from skatetrace.tracing.sections import TraceOptions
 
 
 def _s_curve():
@@ -138,8 +138,8 @@ def test_least_reach_placement_keeps_the_mass_closer_than_the_first_that_works()
     # the school three's second section (turn, then the long arc) for a 1.7 m skater: the first
     # placement that works glides on the long arc with the mass 33 m from the blade; launching
     # straight into the stop at the turn keeps it within 1.3 m
-    from skatetrace.school import school_figure
-    from skatetrace.tracing import trace_section
+    from skatetrace.figures.school import school_figure
+    from skatetrace.tracing.sections import trace_section
 
     sec = school_figure("three", height=1.7).curves[0].sections()[1]
     params = skater_params(height=1.7)
@@ -154,8 +154,8 @@ def test_least_reach_placement_keeps_the_mass_closer_than_the_first_that_works()
 
 
 def test_search_bounds_the_placements_tried_after_the_first_that_works():
-    from skatetrace.school import school_figure
-    from skatetrace.tracing import trace_section
+    from skatetrace.figures.school import school_figure
+    from skatetrace.tracing.sections import trace_section
 
     sec = school_figure("three", height=1.7).curves[0].sections()[1]
     params = skater_params(height=1.7)

@@ -1,4 +1,4 @@
-"""Tests of skatetrace.school (the compulsory figures) and skatetrace.presets (SI parameters)."""
+"""Tests of skatetrace.figures.school (the compulsory figures) and skatetrace.dynamics.presets (SI parameters)."""
 
 from __future__ import annotations
 
@@ -10,10 +10,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from skatetrace.errors import FigureFormatError
-from skatetrace.geometry import Pose, advance, segment_points
-from skatetrace.model import SleighParams
-from skatetrace.presets import MOVING_FRACTION, PAPER_PARAMS, SEGMENT_MASS_FRACTIONS, skater_params
-from skatetrace.school import BLADE, school_figure, school_names
+from skatetrace.figures.geometry import Pose, advance, segment_points
+from skatetrace.dynamics.model import SleighParams
+from skatetrace.dynamics.presets import MOVING_FRACTION, PAPER_PARAMS, SEGMENT_MASS_FRACTIONS, skater_params
+from skatetrace.figures.school import BLADE, school_figure, school_names
 
 NAMES = school_names()
 HEIGHTS = (1.5, 1.9)
@@ -336,7 +336,7 @@ def test_skater_preset_scales_like_a_body():
 
 
 def test_units_are_documented():
-    import skatetrace.presets as presets
+    import skatetrace.dynamics.presets as presets
 
     doc = (presets.__doc__ or "") + (skater_params.__doc__ or "")
     for word in ("kg m^2", "kg", "metres", "m/s", "seconds"):
@@ -363,8 +363,8 @@ def test_bad_presets_raise(kwargs, match):
 # --------------------------------------------------------------------------------------------------
 @pytest.mark.slow
 def test_circle_eight_traces_and_verifies_in_si_units():
-    from skatetrace.tracing import TraceOptions, trace_figure
-    from skatetrace.verify import verify
+    from skatetrace.tracing.sections import TraceOptions, trace_figure
+    from skatetrace.verification.verify import verify
 
     fig = school_figure("circle-eight", height=1.7)
     tr = trace_figure(fig, fig.params, TraceOptions(speed=2.0))  # a glide at 2 m/s

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from skatetrace import SleighParams, pattern, trace_figure
-from skatetrace.controls import ControlSchedule
-from skatetrace.model import mass_energy, skate_energy, velocities
-from skatetrace.simulate import simulate
-from skatetrace.verify import schedule_from_trace
+from skatetrace.dynamics.controls import ControlSchedule
+from skatetrace.dynamics.model import mass_energy, skate_energy, velocities
+from skatetrace.dynamics.simulate import simulate
+from skatetrace.verification.verify import schedule_from_trace
 
 P = SleighParams(M=2.3, m=1.7, I=0.9)
 

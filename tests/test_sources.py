@@ -1,4 +1,4 @@
-"""From names, files and drawings to figures (`skatetrace.sources`), and the `fit` command."""
+"""From names, files and drawings to figures (`skatetrace.drawings.sources`), and the `fit` command."""
 
 import json
 from pathlib import Path
@@ -12,8 +12,8 @@ import pytest  # noqa: E402
 
 from skatetrace.cli import main  # noqa: E402
 from skatetrace.errors import SkatetraceError  # noqa: E402
-from skatetrace.geometry import advance  # noqa: E402
-from skatetrace.sources import resolve  # noqa: E402
+from skatetrace.figures.geometry import advance  # noqa: E402
+from skatetrace.drawings.sources import resolve  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -122,7 +122,7 @@ def test_cli_traces_a_drawing_end_to_end(tmp_path, capsys):
 # exact mode
 # --------------------------------------------------------------------------------------------------
 def test_exact_mode_builds_spirals_within_its_tolerance_and_keeps_the_arc_fit():
-    from skatetrace.geometry import Spiral
+    from skatetrace.figures.geometry import Spiral
 
     r = resolve(str(EXAMPLES / "serpentine.svg"), size="6m", tol="1mm", exact=True)
     assert r.exact is not None and r.exact.success

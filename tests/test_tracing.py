@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from skatetrace import Curve, Figure, Join, Segment, SleighParams, TraceOptions, trace_figure, verify
-from skatetrace.patterns import pattern
+from skatetrace.figures.patterns import pattern
 
 P = SleighParams()
 
@@ -221,8 +221,8 @@ def test_gentle_arcs_and_tiny_lines(seg):
 # --------------------------------------------------------------------------------------------------
 # spirals: curvature varying along the piece (exact mode)
 # --------------------------------------------------------------------------------------------------
-from skatetrace.figure import SMOOTH  # noqa: E402
-from skatetrace.geometry import Spiral  # noqa: E402
+from skatetrace.figures.figure import SMOOTH  # noqa: E402
+from skatetrace.figures.geometry import Spiral  # noqa: E402
 
 _SPIRAL_SECTIONS = {
     "clothoid": (Spiral((0.2, 0.3, 0.0, 0.0), 2.0),),
@@ -274,7 +274,7 @@ def test_pruned_search_and_mirrored_launches_choose_as_the_full_search(seg, monk
     # the paper's second arc (three placements trace it, the last cannot beat the second) and
     # third (one glide at a = 0, whose launch is its stop reversed; the apexes on the axis lie
     # farther out than that glide's whole reach)
-    from skatetrace import tracing
+    from skatetrace.tracing import sections as tracing
 
     sec = _single(seg).curves[0].sections()[0]
     fast = tracing.trace_section(P, sec)
@@ -289,7 +289,7 @@ def test_pruned_search_and_mirrored_launches_choose_as_the_full_search(seg, monk
 
 
 def test_placement_keys_within_rounding_are_a_tie_kept_by_the_first():
-    from skatetrace.tracing import _improves
+    from skatetrace.tracing.sections import _improves
 
     assert _improves((0.9, 5.0), (1.0, 1.0))
     assert not _improves((1.1, 0.5), (1.0, 1.0))

@@ -5,9 +5,9 @@ import importlib
 import numpy as np
 import pytest
 
-from skatetrace.model import SleighParams
+from skatetrace.dynamics.model import SleighParams
 
-verify_module = importlib.import_module("skatetrace.verify")  # the package exports the function as verify
+verify_module = importlib.import_module("skatetrace.verification.verify")  # the package exports the function as verify
 
 
 def _circle_replay(params, times, speeds):

@@ -1,4 +1,4 @@
-"""The self-contained HTML viewer (skatetrace.viewer): static checks, and a real browser.
+"""The self-contained HTML viewer (skatetrace.outputs.viewer): static checks, and a real browser.
 
 The browser tests drive Debian's Chromium (``/usr/bin/chromium``) with Playwright for Python. They
 are skipped where either is missing, unless ``SKATETRACE_REQUIRE_BROWSER=1`` (set by CI), which
@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 from skatetrace.cli import main
-from skatetrace.model import SleighParams
-from skatetrace.playback import Playback, load_playback
-from skatetrace.viewer import SPEED_FACTORS, default_speed, sample_rows, viewer_html, write_viewer
+from skatetrace.dynamics.model import SleighParams
+from skatetrace.outputs.playback import Playback, load_playback
+from skatetrace.outputs.viewer import SPEED_FACTORS, default_speed, sample_rows, viewer_html, write_viewer
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -8,26 +8,26 @@ named like their modules; they are bound at import so that the name always means
 
 from importlib import import_module
 
-from .simulate import Trajectory, simulate  # noqa: F401 (re-exported)
-from .verify import VerificationReport, schedule_from_trace, verify  # noqa: F401 (re-exported)
+from .dynamics.simulate import Trajectory, simulate  # noqa: F401 (re-exported)
+from .verification.verify import VerificationReport, schedule_from_trace, verify  # noqa: F401 (re-exported)
 
 _EXPORTS = {
-    "curves": ("Drawing", "Path"),
-    "deviation": ("DeviationCost", "deviation_cost", "segments_target"),
+    "drawings.curves": ("Drawing", "Path"),
+    "verification.deviation": ("DeviationCost", "deviation_cost", "segments_target"),
     "errors": ("DrawingError", "FigureFormatError", "FitError", "InfeasibleArcError", "SkatetraceError"),
-    "exact": ("ExactDrawingFit", "ExactPathFit", "figure_from_exact", "fit_exact_drawing", "fit_exact_path"),
-    "feasibility": ("Feasibility", "HumanLimits", "assess_feasibility"),
-    "figure": ("Curve", "Figure", "Join", "figure_from_dict", "load_figure"),
-    "fitting": ("DrawingFit", "PathFit", "figure_from_fit", "fit_drawing", "fit_path"),
-    "geometry": ("Pose", "Segment", "Spiral"),
-    "inputs": ("from_function", "load_drawing", "parse_length", "read_points", "read_svg"),
-    "model": ("SleighParams",),
-    "patterns": ("pattern", "pattern_names"),
-    "presets": ("PAPER_PARAMS", "skater_params"),
-    "rests": ("VerifiedTrace", "add_rests", "trace_and_verify"),
-    "school": ("school_figure", "school_names"),
-    "sources": ("Resolved", "resolve"),
-    "tracing": ("FigureTrace", "SectionTrace", "TraceOptions", "TraceStatus", "trace_figure", "trace_section"),
+    "drawings.exact": ("ExactDrawingFit", "ExactPathFit", "figure_from_exact", "fit_exact_drawing", "fit_exact_path"),
+    "verification.feasibility": ("Feasibility", "HumanLimits", "assess_feasibility"),
+    "figures.figure": ("Curve", "Figure", "Join", "figure_from_dict", "load_figure"),
+    "drawings.fitting": ("DrawingFit", "PathFit", "figure_from_fit", "fit_drawing", "fit_path"),
+    "figures.geometry": ("Pose", "Segment", "Spiral"),
+    "drawings.inputs": ("from_function", "load_drawing", "parse_length", "read_points", "read_svg"),
+    "dynamics.model": ("SleighParams",),
+    "figures.patterns": ("pattern", "pattern_names"),
+    "dynamics.presets": ("PAPER_PARAMS", "skater_params"),
+    "pipeline": ("VerifiedTrace", "add_rests", "trace_and_verify"),
+    "figures.school": ("school_figure", "school_names"),
+    "drawings.sources": ("Resolved", "resolve"),
+    "tracing.sections": ("FigureTrace", "SectionTrace", "TraceOptions", "TraceStatus", "trace_figure", "trace_section"),
 }
 _MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
 

@@ -26,8 +26,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..model import SleighParams
-from ..tracing import TraceOptions
+from ..dynamics.model import SleighParams
+from ..tracing.sections import TraceOptions
 from .evaluate import ArcEvaluation, evaluate_exact_arc, evaluate_paper_arc
 from .procedure import paper_cost
 from .reduced import TIGHT_SOLVER, ReducedOptions

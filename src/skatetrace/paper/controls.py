@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..model import SleighParams
+from ..dynamics.model import SleighParams
 
 __all__ = ["CircularControl", "HarmonicControl", "control_from_params", "b_rate_printed"]
 
@@ -84,7 +84,7 @@ def b_rate_printed(params: SleighParams, r: float, p1: float, p2: float, a: floa
     """``bdot`` from the curvature condition ``xi2 = r xi1``, exactly as printed in eq. (b_diff_eq).
 
     Singular where ``a = 0`` and, as the paper does not say, where ``b = (M + m) r / m``. Agrees
-    with ``-(c_a adot + c_0) / c_b`` of :func:`skatetrace.model.curvature_coefficients` at
+    with ``-(c_a adot + c_0) / c_b`` of :func:`skatetrace.dynamics.model.curvature_coefficients` at
     ``kappa = 1 / r`` (a test checks it).
     """
     M, m, I = params.M, params.m, params.I

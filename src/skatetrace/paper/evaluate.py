@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..deviation import deviation_cost, segments_target
-from ..figure import Curve, Figure
-from ..geometry import Pose, Segment
-from ..model import SleighParams, mass_energy, singular_point, skate_energy, velocities
-from ..simulate import simulate
-from ..tracing import TraceOptions, trace_figure
-from ..verify import schedule_from_trace, verify
+from ..verification.deviation import deviation_cost, segments_target
+from ..figures.figure import Curve, Figure
+from ..figures.geometry import Pose, Segment
+from ..dynamics.model import SleighParams, mass_energy, singular_point, skate_energy, velocities
+from ..dynamics.simulate import simulate
+from ..tracing.sections import TraceOptions, trace_figure
+from ..verification.verify import schedule_from_trace, verify
 from .controls import CircularControl, b_rate_printed, control_from_params
 from .procedure import _cost_of
 from .reduced import TIGHT_SOLVER, ReducedArc, ReducedOptions, integrate_reduced
@@ -262,7 +262,7 @@ def evaluate_exact_arc(row: PaperRow, *, params: SleighParams = SleighParams(),
     """Trace ``row``'s arc (same radius, :attr:`PaperRow.exact_length`, rest to rest) exactly and verify it.
 
     The arc starts at the table's initial point and heading. The full-dynamics numbers come from
-    :func:`skatetrace.verify.verify` (the independent replay of the written controls).
+    :func:`skatetrace.verification.verify.verify` (the independent replay of the written controls).
     """
     t0 = time.perf_counter()
     start = Pose(row.initial[3], row.initial[4], row.initial[2])

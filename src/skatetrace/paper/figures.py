@@ -19,7 +19,7 @@ forward part (green); the exact engine's series (``label == "exact"``) runs from
 and is drawn in one colour (``C0``). Non-finite samples (the appendix arcs pass through the
 singular set ``a = 0`` of (b_diff_eq)) are masked, never plotted, and never raise. Every axis
 names its quantity and unit: the paper's dimensionless model units (``model length``, ``model
-time``, ...; :func:`skatetrace.plotting.axis_units`).
+time``, ...; :func:`skatetrace.outputs.plotting.axis_units`).
 
 Figures are built with the object API (:class:`matplotlib.figure.Figure`), so nothing is registered
 with pyplot and nothing needs closing; matplotlib is imported inside the functions only.
@@ -33,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..geometry import Pose, segment_points
-from ..model import SleighParams, mass_energy, skate_energy
-from ..plotting import axis_units
+from ..figures.geometry import Pose, segment_points
+from ..dynamics.model import SleighParams, mass_energy, skate_energy
+from ..outputs.plotting import axis_units
 from .tables import METHODS
 
 __all__ = ["plot_arc", "plot_arc_mass", "plot_energies", "plot_leaf", "plot_pattern", "plot_endpoints",
@@ -52,7 +52,7 @@ _DPI = 110
 _INNER_ARCS = (1,)
 _ORDINALS = ("first", "second", "third")
 _OUTER_ARCS = (3, 2, 3)
-#: The paper's dimensionless units, named on every axis as in :mod:`skatetrace.plotting`.
+#: The paper's dimensionless units, named on every axis as in :mod:`skatetrace.outputs.plotting`.
 _U = axis_units("model")
 _X = f"x ({_U['length']})"
 _Y = f"y ({_U['length']})"
@@ -247,7 +247,7 @@ def _placed_path(ev, pose: Pose) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _double_flower():
-    from ..patterns import pattern
+    from ..figures.patterns import pattern
 
     return pattern("double-flower")
 
@@ -370,8 +370,8 @@ def plot_energies(pairs, fig=None, params: SleighParams = SleighParams()):
     Returns
     -------
     matplotlib.figure.Figure
-        ``2 * len(pairs)`` axes: :func:`~skatetrace.model.mass_energy` (left) and
-        :func:`~skatetrace.model.skate_energy` (right) against ``t``. A panel switches to a log
+        ``2 * len(pairs)`` axes: :func:`~skatetrace.dynamics.model.mass_energy` (left) and
+        :func:`~skatetrace.dynamics.model.skate_energy` (right) against ``t``. A panel switches to a log
         y-scale when its maximum exceeds its median by more than four decades (the appendix arcs'
         mass energy blows up near ``a = 0``); non-finite values are left out.
     """
@@ -557,7 +557,7 @@ def plot_endpoints(pairs, fig=None):
 
 
 def _save(fig, path: Path) -> Path:
-    from ..io import atomic_write
+    from ..outputs.io import atomic_write
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=_DPI)

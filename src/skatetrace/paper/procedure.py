@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from ..model import SleighParams
+from ..dynamics.model import SleighParams
 from .controls import control_from_params
 from .reduced import PAPER_SOLVER, ReducedArc, ReducedOptions, integrate_reduced
 from .tables import PaperRow

@@ -33,7 +33,7 @@ import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolution, Radau
 from scipy.optimize import brentq
 
-from ..model import SleighParams, velocities
+from ..dynamics.model import SleighParams, velocities
 from .controls import CircularControl, HarmonicControl, b_rate_printed
 
 __all__ = ["ReducedOptions", "HalfArc", "ReducedArc", "integrate_reduced", "PAPER_SOLVER", "TIGHT_SOLVER"]

@@ -36,9 +36,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..io import atomic_write
-from ..model import SleighParams
-from ..tracing import TraceOptions
+from ..outputs.io import atomic_write
+from ..dynamics.model import SleighParams
+from ..tracing.sections import TraceOptions
 from .conditioning import (Conditioning, Perturbation, Spread, condition_cost, condition_exact_arc,
                            condition_paper_arc, perturbations)
 from .errata import Erratum, find_errata

@@ -5,7 +5,7 @@ curvature condition, eq. (b_diff_eq): ``bdot = F / (a g)`` with (at ``kappa = 1 
 
     g = m (kappa m b - (M + m)),        F = -(c_a adot + c_0)
 
-(``c_a, c_0`` of :func:`skatetrace.model.curvature_coefficients`). Where ``a(t)`` has a simple zero
+(``c_a, c_0`` of :func:`skatetrace.dynamics.model.curvature_coefficients`). Where ``a(t)`` has a simple zero
 ``t*`` the equation is singular. Whether an integrator "breaks down" there, steps across, or
 continues on some branch depends on its step sizes and on round-off, so none of that is a fact
 about the paper's optimum. What is a fact is what happens *on the way in*, which is a regular ODE
@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ..model import SleighParams, mass_energy
+from ..dynamics.model import SleighParams, mass_energy
 from .controls import HarmonicControl, control_from_params
 from .reduced import TIGHT_SOLVER, ReducedOptions, integrate_reduced
 from .tables import PaperRow

@@ -1,0 +1,537 @@
+"""Command-line interface: ``skatetrace trace``, ``fit``, ``animate``, ``view``, ``figures`` and ``reproduce``.
+
+The only module that prints or exits. Exit codes: 0 success, 1 a solve or verification that
+failed, 2 a usage error (bad arguments, unreadable or malformed figure file).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+from ..errors import SkatetraceError
+from ..dynamics.model import SleighParams
+from ..figures.patterns import pattern, pattern_names
+from ..drawings.sources import DRAWING_SUFFIXES
+from ..pipeline import REST_POLICIES
+from ..tracing.sections import TraceOptions
+
+__all__ = ["main"]
+
+
+def _add_source_args(t) -> None:
+    g = t.add_argument_group("drawings (SVG, point lists)")
+    g.add_argument("--size", help="scale the drawing so its larger side is this, e.g. 6m or 12 (model units); "
+                                  "default: the drawing's own units")
+    g.add_argument("--tol", help="fitting tolerance, a certified Hausdorff distance, e.g. 1mm or 1e-3 "
+                                 "(figure units); default 1e-3 of the figure's size")
+    g.add_argument("--fit", dest="method", choices=("greedy", "min"), default="greedy",
+                   help="arc-spline fit: greedy subdivision or the minimum number of arcs (default greedy)")
+    g.add_argument("--exact", nargs="?", const=True, default=None, metavar="TOL",
+                   help="exact mode: trace the smooth runs as curvature splines (spirals whose curvature is a "
+                        "cubic of arc length) within TOL (default 1e-7 of the figure's size) instead of arcs; "
+                        "the arc fit is still made and both deviations are shown")
+    s = t.add_argument_group("school figures (school:NAME)")
+    s.add_argument("--height", type=float, default=1.7, help="skater height in m (default 1.7)")
+    s.add_argument("--body-mass", type=float, default=60.0, help="skater body mass in kg (default 60)")
+    s.add_argument("--blade", type=float, default=0.28, help="blade length in m (default 0.28)")
+    s.add_argument("--edge", default="outside", help="outside or inside (default outside)")
+    s.add_argument("--direction", default="forward", help="forward or backward (default forward)")
+    s.add_argument("--foot", default="right", help="right or left (default right)")
+
+
+def _version() -> str:
+    """The installed distribution's version, else the package's own (a source checkout on sys.path)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("skatetrace")
+    except PackageNotFoundError:
+        from .. import __version__
+
+        return __version__
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse whose usage errors read like every other: ``skatetrace: error: ...``, exit code 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"skatetrace: error: {message} (see '{self.prog} --help')\n")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="skatetrace", description="Controls that make a skater trace a figure exactly.")
+    p.add_argument("--version", action="version", version=f"skatetrace {_version()}")
+    sub = p.add_subparsers(dest="command", required=True)
+    t = sub.add_parser("trace", help="trace a figure, verify it by re-simulation, write results")
+    t.add_argument("figure", help=f"a built-in figure ({', '.join(pattern_names())}), school:NAME, a figure JSON "
+                                  "file, or a drawing (.svg, .csv, .txt, .dat)")
+    t.add_argument("--out", default="out", help="output folder (default: out)")
+    t.add_argument("--M", type=float, help="sleigh mass (default: the figure's, else 2)")
+    t.add_argument("--m", type=float, help="moving mass (default: the figure's, else 1)")
+    t.add_argument("--I", type=float, help="sleigh inertia about the contact point (default: the figure's, else 3)")
+    t.add_argument("--speed", type=float, help="glide speed (default: 1 model unit, 2 m/s for figures in metres)")
+    t.add_argument("--verify-tol", type=float, default=1e-6,
+                   help="allowed deviation from the traced pieces as a fraction of the figure size (default 1e-6)")
+    t.add_argument("--rests", choices=REST_POLICIES, default="auto",
+                   help="rests at smooth joins: auto (where a section's replay fails verification, split it "
+                        "and the sections before it at their middle join and try again), never, or joins "
+                        "(at every smooth join); default auto")
+    t.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    t.add_argument("--no-viewer", action="store_true", help="skip viewer.html (the self-contained HTML viewer)")
+    _add_source_args(t)
+    f = sub.add_parser("fit", help="fit a drawing by arcs and lines (and, with --exact, curvature splines) "
+                                   "without tracing: pieces, certified tolerance, plot")
+    f.add_argument("drawing", help="an SVG file or a point list (.csv, .txt, .dat)")
+    f.add_argument("--out", default="fit", help="output folder for fit.json and fit.png (default: fit)")
+    f.add_argument("--no-plots", action="store_true", help="skip fit.png")
+    _add_source_args(f)
+    a = sub.add_parser("animate", help="a GIF or MP4 (or a PNG still) of a traced figure, from its result files")
+    a.add_argument("source", help="the output folder of 'skatetrace trace', or its result.json")
+    a.add_argument("-o", "--output", required=True, help="file to write: .gif, .mp4, or .png for one frame")
+    a.add_argument("--fps", type=float, default=25.0, help="frames per second (default 25)")
+    a.add_argument("--duration", type=float,
+                   help="length of the video in s (default: the figure's own time, kept within 8 to 30 s)")
+    a.add_argument("--size", default="800x800", help="WIDTHxHEIGHT in pixels (default 800x800)")
+    a.add_argument("--time", type=float, help="for a .png still: the figure's time to draw (default: 60%% through)")
+    v = sub.add_parser("view", help="one self-contained HTML file that plays a traced figure (no network needed)")
+    v.add_argument("source", help="the output folder of 'skatetrace trace', or its result.json")
+    v.add_argument("-o", "--output", help="HTML file to write (default: viewer.html in the source folder)")
+    sub.add_parser("figures", help="list the built-in figures and the school figures")
+    r = sub.add_parser("reproduce", help="reproduce the paper's tables three ways, with figures and errata")
+    r.add_argument("--out", default="rep", help="output folder (default: rep)")
+    r.add_argument("--methods", default="main,point,length",
+                   help="comma-separated subset of main (Tables 1-2), point (3-4), length (5-6)")
+    r.add_argument("--arcs", default="1,2,3", help="comma-separated subset of the arcs 1, 2, 3")
+    r.add_argument("--maxiter", type=int, help="cap on BFGS iterations of the re-run procedure (default: scipy's)")
+    r.add_argument("--no-figures", action="store_true", help="skip the figures (tables and errata only)")
+    r.add_argument("--no-conditioning", action="store_true",
+                   help="skip re-running each evaluation under tiny perturbations (saves about 1.5 min; the report "
+                        "then prints one run's digits)")
+    return p
+
+
+def _resolve(args, name: str):
+    from ..drawings.sources import resolve
+
+    return resolve(name, size=args.size, tol=args.tol, method=args.method, height=args.height, blade=args.blade,
+                   edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass,
+                   exact=args.exact)
+
+
+def _exact_summary(res) -> dict | None:
+    ex = res.exact
+    if ex is None:
+        return None
+    return {
+        "tol": res.exact_tol, "deviation": ex.deviation, "n_spirals": ex.n_spirals, "n_arcs": ex.n_arcs,
+        "n_lines": ex.n_lines, "message": ex.message,
+        "paths": [{"name": pf.name, "runs": len(pf.runs), "n_spirals": pf.n_spirals, "n_arcs": pf.n_arcs,
+                   "n_lines": pf.n_lines, "deviation": pf.deviation, "sampled": pf.sampled,
+                   "where": None if pf.where is None else list(pf.where)} for pf in ex.paths],
+    }
+
+
+def _fit_summary(res) -> dict:
+    fit = res.fit
+    return {
+        "schema": "skatetrace.fit/1", "success": fit.success, "message": fit.message, "unit": res.unit,
+        "tol": res.tol, "hausdorff_certified": fit.hausdorff, "hausdorff_sampled": fit.hausdorff_sampled,
+        "n_arcs": fit.n_arcs, "n_lines": fit.n_lines, "notes": list(res.notes),
+        "paths": [{
+            "name": pf.name, "closed": pf.closed, "runs": len(pf.runs), "n_arcs": pf.n_arcs, "n_lines": pf.n_lines,
+            "hausdorff_certified": pf.hausdorff, "hausdorff_sampled": pf.hausdorff_sampled,
+            "where": None if pf.where is None else pf.where._asdict(), "curve_length": pf.curve_length,
+            "spline_length": pf.spline_length, "method": pf.method, "greedy_count": pf.greedy_count,
+            "min_count": pf.min_count,
+            "corners_deg": [None if r.corner is None else math.degrees(r.corner) for r in pf.runs],
+        } for pf in fit.paths],
+        "exact": _exact_summary(res),
+        "figure": res.figure.to_dict(),
+    }
+
+
+def _write_fit(res, out: Path, plots: bool) -> list[Path]:
+    from ..outputs.io import atomic_write, dumps_json, write_atomically
+
+    written = [out / "fit.json"]
+    atomic_write(out / "fit.json", dumps_json(_fit_summary(res)))  # strict JSON: NaN written as null
+    if plots:
+        from ..outputs.plotting import fit_figure
+
+        fig = fit_figure(res.drawing, res.fit, exact=res.exact, unit=res.unit)
+        write_atomically(out / "fit.png", lambda tmp: fig.savefig(tmp, format="png", dpi=110))  # whole or not at all
+        written.append(out / "fit.png")
+    return written
+
+
+def _fit(args) -> int:
+    t0 = time.perf_counter()
+    res = _resolve(args, args.drawing)
+    if res.kind != "drawing":
+        raise SkatetraceError(f"{args.drawing!r} is not a drawing: 'fit' takes an SVG or a point list "
+                              f"({', '.join(DRAWING_SUFFIXES)})")
+    out = Path(args.out)
+    paths = _write_fit(res, out, not args.no_plots)
+    fit = res.fit
+    print(f"drawing {res.drawing.name}: {len(fit.paths)} path(s), {res.drawing.size():.4g} {res.unit} across")
+    print(f"{'path':>4} {'name':>16} {'runs':>5} {'arcs':>5} {'lines':>6} {'greedy':>7} {'min':>5} "
+          f"{'hausdorff':>10} {'where (x, y)':>22}")
+    for i, pf in enumerate(fit.paths):
+        where = "" if pf.where is None else f"({pf.where.x:.4g}, {pf.where.y:.4g})"
+        print(f"{i:>4} {pf.name[:16]:>16} {len(pf.runs):>5} {pf.n_arcs:>5} {pf.n_lines:>6} {pf.greedy_count:>7} "
+              f"{'-' if pf.min_count is None else pf.min_count:>5} {pf.hausdorff:>10.3g} {where:>22}")
+    print(f"arc mode: certified Hausdorff distance {fit.hausdorff:.3g} <= tolerance {res.tol:.3g} {res.unit}")
+    if res.exact is not None:
+        ex = res.exact
+        print(f"exact mode: {ex.n_spirals} spirals, {ex.n_arcs} arcs, {ex.n_lines} lines within {ex.deviation:.3g} "
+              f"{res.unit} of the drawing (measured; tolerance {res.exact_tol:.3g})")
+    print(f"wrote {', '.join(p.name for p in paths)} to {out}/ in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _human_limits(args, res, params: SleighParams):
+    """The feasibility limits: the skater of ``--height``/``--body-mass`` in metres, else model units."""
+    from ..verification.feasibility import HumanLimits
+
+    if res.unit == "m":
+        return HumanLimits.for_skater(args.height, args.body_mass, moving_mass=params.m)
+    return None  # trace_and_verify then takes model units at the scale of the paper's figure
+
+
+def _print_feasibility(done) -> None:
+    """The second verdict, check by check, and a warning on stderr when a skater could not do it."""
+    f = done.feasibility
+    if f is None:
+        return
+    print(f"feasibility: {f.status} (limits for {f.limits.assumptions})")
+    for c in f.checks:
+        print(f"  {'ok' if c.passed else 'BEYOND':>6}  {c.phrase()}")
+    info = f.info
+    print(f"  peak force on the mass {info['peak_force_on_mass']:.3g} {info['force_unit']} (limit "
+          f"{info['force_limit']:.3g}), peak mass kinetic energy {info['peak_mass_kinetic_energy']:.3g} "
+          f"{info['energy_unit']}")
+    if not f.feasible:
+        print(f"skatetrace: warning: {done.verdict}", file=sys.stderr)
+
+
+def _compile_once() -> None:
+    """Where numba's cache is cold (a first run): say so, and compile part by part, saying which."""
+    from .compiled import cache_is_warm, warm_up
+
+    if cache_is_warm() is not False:
+        return
+    print("skatetrace: compiling the numerical core, once (about 15 s; later runs reuse it)", file=sys.stderr,
+          flush=True)
+    seconds = warm_up(lambda part, i, n: print(f"  compiling {part} ({i}/{n})", file=sys.stderr, flush=True))
+    print(f"  compiled in {seconds:.0f} s", file=sys.stderr, flush=True)
+
+
+def _trace(args) -> int:
+    from ..outputs.io import write_results
+    from ..pipeline import trace_and_verify
+
+    t0 = time.perf_counter()
+    res = _resolve(args, args.figure)
+    figure = res.figure
+    base = figure.params or SleighParams()
+    params = SleighParams(M=args.M if args.M is not None else base.M, m=args.m if args.m is not None else base.m,
+                          I=args.I if args.I is not None else base.I)
+    speed = args.speed if args.speed is not None else (2.0 if res.unit == "m" else 1.0)
+    options = TraceOptions(speed=speed)
+    for note in res.notes:
+        print(f"note: {note}")
+    _compile_once()
+
+    def progress(done, total):
+        print(f"\rtracing sections {done}/{total}", end="", file=sys.stderr, flush=True)
+
+    limits = _human_limits(args, res, params)
+    done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
+                            progress=progress)
+    print(file=sys.stderr)
+    figure, trace, schedule, states, report = done.figure, done.trace, done.schedule, done.states, done.report
+    if done.rests:
+        where = ", ".join(f"before piece {pi}" + (f" of curve {ci}" if len(figure.curves) > 1 else "")
+                          for ci, pi in done.rests)
+        print(f"note: rests added at smooth joins ({where}): sections failed to trace or their replay strayed "
+              f"more than allowed; {done.rounds} trace-and-verify rounds")
+    out = Path(args.out)
+    write_results(out, trace, schedule, states, report, unit=res.unit, feasibility=done.feasibility)
+    if res.fit is not None:
+        _write_fit(res, out, not args.no_plots)
+    if not args.no_plots:
+        from ..outputs.plotting import save_all
+
+        save_all(trace, report, out, unit=res.unit)
+    if not args.no_viewer and schedule.t.size < 2:
+        print("note: viewer.html not written: no section could be traced, so there is nothing to play")
+    elif not args.no_viewer:
+        from ..outputs.playback import load_playback
+        from ..outputs.viewer import write_viewer
+
+        write_viewer(load_playback(out), out / "viewer.html")
+    elapsed = time.perf_counter() - t0
+    unit = "m" if res.unit == "m" else "model units"
+    print(f"figure {figure.name}: {len(figure.curves)} curve(s), {len(trace.sections)} section(s), "
+          f"M={params.M:g} m={params.m:g} I={params.I:g} ({'SI: kg, kg m^2, m, s' if res.unit == 'm' else 'model units'})")
+    print(f"{'section':>7} {'pieces':>14} {'length':>9} {'duration':>9} {'max residual':>13} {'status':>8}")
+    for i, s in enumerate(trace.sections):
+        resid = max(s.residuals.values()) if s.residuals else float("nan")
+        pcs = ",".join(str(p.index) for p in s.section.pieces)
+        if len(pcs) > 14:
+            pcs = pcs[:6] + ".." + pcs[-6:]
+        print(f"{i:>7} {pcs:>14} {s.length:>9.4f} {s.duration:>9.4f} {resid:>13.2e} {'ok' if s.success else 'FAILED':>8}")
+        if not s.success:
+            print(f"        reason: {s.message}")
+    for c in figure.curves:
+        cl = c.closure()
+        print(f"curve {c.name}: {'closed' if cl['closed'] else 'open'} (end-to-start gap {cl['position_gap']:.2e}, "
+              f"heading gap {cl['heading_gap']:.2e} rad)")
+    replayed = schedule.t.size > 0
+    if replayed:
+        print(f"max deviation from the traced pieces {report.max_deviation:.3e} {unit} (tolerance "
+              f"{report.tolerance:.3e}, figure size {report.figure_size:.4g}); max cusp speed "
+              f"{report.max_cusp_speed:.3e}")
+    else:
+        print("nothing was replayed: no section could be traced")
+    ok = trace.success and report.success
+    if res.fit is not None and replayed:
+        size = report.figure_size
+        if res.exact is not None:
+            bound = res.exact.deviation + report.max_deviation
+            allowed = res.exact_tol + args.verify_tol * size
+            print(f"arc mode would deviate from the drawing by up to {res.fit.hausdorff:.3e} {unit} (certified arc "
+                  f"fit, {res.fit.n_arcs} arcs, {res.fit.n_lines} lines) plus its replay")
+            print(f"exact mode: deviation from the drawing <= {bound:.3e} {unit} (curvature splines "
+                  f"{res.exact.deviation:.3e} + replay {report.max_deviation:.3e}); allowed {allowed:.3e} "
+                  f"(exact tolerance + {args.verify_tol:g} x size)")
+        else:
+            bound = res.fit.hausdorff + report.max_deviation
+            allowed = res.tol + args.verify_tol * size
+            print(f"deviation from the drawing <= {bound:.3e} {unit} (certified fit {res.fit.hausdorff:.3e} + replay "
+                  f"{report.max_deviation:.3e}); allowed {allowed:.3e} (fit tolerance + {args.verify_tol:g} x size)")
+        ok = ok and bound <= allowed
+    _print_feasibility(done)
+    print(f"verification: {report.status} ({report.message}); wrote {out}/ in {elapsed:.1f} s")
+    print(f"verdict: {done.verdict}")
+    return 0 if ok else 1
+
+
+def _pixels(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise SkatetraceError(f"--size must be WIDTHxHEIGHT in whole pixels, e.g. 800x800; got {text!r}") from None
+    return w, h
+
+
+def _progress_bar(label: str):
+    """A progress callback drawing ``label [####....] done/total`` on stderr, redrawn once per percent."""
+    shown = [-1]
+
+    def show(done: int, total: int) -> None:
+        percent = 100 * done // max(total, 1)
+        if percent == shown[0] and done < total:
+            return
+        shown[0] = percent
+        filled = 30 * done // max(total, 1)
+        end = "\n" if done >= total else ""
+        print(f"\r{label} [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}", end=end, file=sys.stderr,
+              flush=True)
+    return show
+
+
+def _still_time(args, pb) -> float:
+    """``--time`` (on the clock the frames show: 0 at the start) checked against the figure's duration."""
+    if args.time is None:
+        return 0.6 * pb.duration
+    unit = "s" if pb.unit == "m" else "time units"
+    if not (math.isfinite(args.time) and -5e-6 <= args.time <= pb.duration * (1 + 5e-6) + 5e-6):
+        raise SkatetraceError(f"--time {args.time:g} is outside the figure's time: give a time from 0 to "
+                              f"{pb.duration:.6g} {unit} (the figure's duration)")
+    return min(max(args.time, 0.0), pb.duration)
+
+
+def _animate(args) -> int:
+    from ..outputs.animation import SUFFIXES, STILL_SUFFIXES, AnimationOptions, animate, save_still
+    from ..outputs.io import check_output_file
+    from ..outputs.playback import load_playback
+
+    t0 = time.perf_counter()
+    out = Path(args.output)
+    check_output_file(out, label="-o", suffixes=SUFFIXES + STILL_SUFFIXES, create_parent=False)
+    if args.time is not None and out.suffix.lower() not in STILL_SUFFIXES:
+        raise SkatetraceError(f"--time picks the one frame of a still: use it with -o NAME.png (a "
+                              f"{out.suffix.lower()} plays the whole figure)")
+    options = AnimationOptions(fps=args.fps, duration=args.duration, size_px=_pixels(args.size))
+    pb = load_playback(args.source)
+    if out.suffix.lower() in STILL_SUFFIXES:
+        at = _still_time(args, pb)
+        save_still(pb, out, float(pb.t[0]) + at, options)
+        print(f"wrote a still of {pb.name} at t = {at:.6g} {'s' if pb.unit == 'm' else 'time units'} "
+              f"to {out} in {time.perf_counter() - t0:.1f} s")
+        return 0
+    res = animate(pb, out, options, progress=_progress_bar("rendering frames"))
+    print(f"wrote {res.path}: {res.frames} frames, {res.width}x{res.height} px, {res.fps:g} fps "
+          f"({res.frames / res.fps:.1f} s of video for {pb.duration:.4g} {'s' if pb.unit == 'm' else 'time units'} "
+          f"of skating) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _view(args) -> int:
+    from ..outputs.io import adopt, check_output_file
+    from ..outputs.playback import load_playback
+    from ..outputs.viewer import write_viewer
+
+    t0 = time.perf_counter()
+    src = Path(args.source)
+    target = Path(args.output) if args.output else (src.parent if src.suffix == ".json" else src) / "viewer.html"
+    if target.is_dir():
+        target = target / "viewer.html"
+    check_output_file(target, label="-o" if args.output else "view", suffixes=(".html", ".htm"))
+    pb = load_playback(args.source)
+    path = write_viewer(pb, target)
+    if path.name == "viewer.html":
+        adopt(path)  # in a run's folder, the viewer is that run's: the next run there replaces or removes it
+    print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB, self-contained: open it in any browser) "
+          f"in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _reproduce(args) -> int:
+    from ..paper.report import reproduce, write_report
+
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    try:
+        arcs = [int(a) for a in args.arcs.split(",") if a.strip()]
+    except ValueError:
+        raise SkatetraceError(f"--arcs must be comma-separated arc numbers 1, 2, 3, got {args.arcs!r}") from None
+    if args.maxiter is not None and args.maxiter < 1:
+        raise SkatetraceError(f"--maxiter must be a positive number of iterations, got {args.maxiter}")
+    _compile_once()
+    rep = reproduce(methods, arcs, maxiter=args.maxiter, conditioning=not args.no_conditioning,
+                    progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+    t0 = time.perf_counter()
+    out = Path(args.out)  # "rep/" and "rep" name the same folder; printed once, without a doubled slash
+    paths = write_report(rep, out, figures=not args.no_figures)
+    # Digits the perturbed re-runs share (or "ill-conditioned (spread ...)"), as report.md prints them.
+    table = [["row", "printed error", "published cost", "full dev.", "re-run cost", "full dev.", "exact dev."]]
+    for rr in rep.rows:
+        err = rr.row.published_error
+        table.append([f"Table {rr.row.tables} arc {rr.row.arc}", f"{err:.4g}" if err is not None else "—",
+                      rr.text("published", "cost"), rr.text("published", "full_deviation"), rr.text("rerun", "cost"),
+                      rr.text("rerun", "full_deviation"), rr.text("exact", "full_deviation")])
+    widths = [max(len(r[k]) for r in table) for k in range(len(table[0]))]
+    for r in table:
+        print("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
+    if args.no_conditioning:
+        print("conditioning not measured (--no-conditioning): one run's digits; rows that reach a = 0 are ill-conditioned")
+    confirmed = sum(e.confirmed for e in rep.errata)
+    print(f"errata: {confirmed} of {len(rep.errata)} confirmed")
+    print(f"{rep.message}; computed in {rep.seconds:.0f} s (as report.md says); wrote {len(paths)} files to "
+          f"{out.as_posix()}/ (report.md, report.html) in {time.perf_counter() - t0:.0f} s more")
+    return 0 if rep.success else 1
+
+
+def _figures(args) -> int:
+    from ..figures.school import school_names
+
+    for name in pattern_names():
+        print(f"{name:24s} {pattern(name).description}")
+    for name in school_names():
+        print(f"school:{name:17s} school figure sized for a skater (--height, --edge, --direction, --foot)")
+    return 0
+
+
+def _check_values(args) -> None:
+    """Refuse bad numbers (zero, negative, NaN, infinite, out of range) before any work is done."""
+    from ..figures.figure import PARAM_RANGE
+    from ..tracing.sections import SPEED_RANGE
+
+    def positive(name: str, value, upper: float = math.inf) -> None:
+        if value is not None and not (math.isfinite(value) and 0 < value <= upper):
+            bound = "" if upper == math.inf else f" at most {upper:g}"
+            raise SkatetraceError(f"{name} must be a positive finite number{bound}, got {value!r}")
+
+    if args.command not in ("trace", "fit"):
+        return
+    for name, upper in (("height", 1e3), ("body_mass", 1e6), ("blade", 1e3)):
+        positive("--" + name.replace("_", "-"), getattr(args, name), upper)
+    lengths = [("--size", args.size), ("--tol", args.tol), ("--exact", None if args.exact is True else args.exact)]
+    if any(value is not None for _, value in lengths):  # checked for every figure, not only drawings
+        from ..drawings.inputs import parse_length
+
+        for name, value in lengths:
+            try:
+                value is None or parse_length(value)
+            except SkatetraceError as exc:
+                raise SkatetraceError(f"{name}: {exc}") from None
+    if args.command == "trace":
+        for name in ("M", "m", "I"):
+            value = getattr(args, name)
+            if value is not None and not PARAM_RANGE[0] <= value <= PARAM_RANGE[1]:
+                raise SkatetraceError(f"--{name} must be a positive number between {PARAM_RANGE[0]:g} and "
+                                      f"{PARAM_RANGE[1]:g}, got {value!r}")
+        positive("--verify-tol", args.verify_tol, 1.0)
+        if args.speed is not None and not SPEED_RANGE[0] <= args.speed <= SPEED_RANGE[1]:
+            raise SkatetraceError(f"--speed must be a positive number between {SPEED_RANGE[0]:g} and "
+                                  f"{SPEED_RANGE[1]:g}, got {args.speed!r}")
+
+
+def _run(args) -> int:
+    commands = {"figures": _figures, "fit": _fit, "reproduce": _reproduce, "animate": _animate, "view": _view,
+                "trace": _trace}
+    return commands[args.command](args)
+
+
+def _output_folder(args):
+    """The ``--out`` folder of ``trace``, ``fit`` and ``reproduce``, checked (and created) before any work."""
+    from ..outputs.io import OutputFolder
+
+    if args.command in ("trace", "fit"):
+        return OutputFolder(args.out, args.command)
+    if args.command == "reproduce":
+        return OutputFolder(args.out, args.command, subfolders=() if args.no_figures else ("figures",))
+    return None
+
+
+def _finish_folder(folder) -> None:
+    """Remove the files of an earlier run this one did not write, and say which."""
+    removed = folder.finish()
+    if removed:
+        print(f"note: removed {len(removed)} file(s) an earlier run wrote to {folder.path}/ and this one did not "
+              f"(so that the folder holds one run's results): {', '.join(removed)}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit code."""
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    try:
+        _check_values(args)
+        folder = _output_folder(args)  # checked before any work
+        if folder is None:
+            return _run(args)
+        try:
+            with folder:
+                code = _run(args)
+        except BaseException:
+            folder.discard()  # the folders the check created, if nothing was written into them
+            raise
+        _finish_folder(folder)
+        return code
+    except (SkatetraceError, ValueError, TypeError, OSError) as exc:
+        print(f"skatetrace: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

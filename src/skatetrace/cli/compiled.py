@@ -1,0 +1,117 @@
+"""The compiled numerical core: is numba's on-disk cache of it ready, and compiling it ahead of a run.
+
+The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`) and
+the distance checks of :mod:`skatetrace.verification.verify` are compiled by numba with ``cache=True``: the first
+run on a machine compiles them (10-20 s, depending on the machine) and writes the machine code to
+numba's cache (the ``__pycache__`` folders beside the sources, or, where those cannot be written,
+numba's folder in the user's cache directory, or ``NUMBA_CACHE_DIR``); every later run loads it in
+a fraction of a second.
+The cache is keyed by the source file's time stamp and size, the function's bytecode and the CPU, so
+it is rebuilt after an upgrade or on another machine, never reused wrongly.
+
+:func:`cache_is_warm` says whether a run would load rather than compile; :func:`warm_up` compiles
+(or loads) everything a trace needs by tracing and verifying a small figure, reporting each part as
+it starts, so that a caller (the command line) can say what is happening, or an installer (a
+container build, a ``postinstall`` step) can pay that once, ahead of any real work.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from importlib import import_module
+
+__all__ = ["ENTRY_POINTS", "cache_is_warm", "warm_up"]
+
+#: The compiled functions called from Python, by part: compiling them compiles everything they call.
+ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
+    ("the manoeuvre integrator", (("skatetrace.dynamics.integrator", "_run"), ("skatetrace.dynamics.integrator", "_evaluate_steps"))),
+    ("the verifying replay", (("skatetrace.dynamics.replayer", "_run"),)),
+    ("the distance checks", (("skatetrace.verification.verify", "_golden_distances"), ("skatetrace.verification.verify", "_hermite_distance"))),
+)
+
+
+def _dispatchers():
+    for part, entries in ENTRY_POINTS:
+        for module, name in entries:
+            yield part, getattr(import_module(module), name)
+
+
+def _is_cached(dispatcher) -> bool:
+    """Whether numba's cache holds machine code of ``dispatcher`` for this source, bytecode and CPU."""
+    if dispatcher.signatures:  # compiled (or loaded) in this process already
+        return True
+    cache = dispatcher._cache
+    index = cache._cache_file._load_index()  # empty if missing or stale (another source time stamp)
+    if not index:
+        return False
+    codegen = dispatcher.targetctx.codegen()
+    _, magic, code = cache._index_key((), codegen)
+    return any(key[1] == magic and key[2] == code for key in index)
+
+
+def cache_is_warm() -> bool | None:
+    """Whether a trace would load the compiled core from numba's cache instead of compiling it.
+
+    Returns
+    -------
+    bool or None
+        ``True``: every entry point is cached for this machine (or already compiled in this process);
+        ``False``: some part would be compiled (10-20 s in all); ``None``: cannot tell (numba's cache
+        internals changed, or JIT compilation is disabled with ``NUMBA_DISABLE_JIT=1``).
+    """
+    try:
+        return all(_is_cached(d) for _, d in _dispatchers())
+    except Exception:  # numba's private cache layout is not an API: never fail a run over it
+        return None
+
+
+def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
+    """Compile (or load from numba's cache) everything tracing and verifying a figure needs.
+
+    Traces and verifies the built-in ``circle``: compilation depends only on the argument types, never
+    on the figure, so this covers every figure (in the same process and, through the cache, in later
+    ones).
+
+    Parameters
+    ----------
+    progress : callable, optional
+        Called as ``progress(part, index, count)`` when the compilation of a part starts (``part`` as in
+        :data:`ENTRY_POINTS`, ``index`` from 1 to ``count``); not called for parts loaded from the cache.
+
+    Returns
+    -------
+    float
+        Seconds taken.
+    """
+    start = time.perf_counter()
+    listener = None
+    if progress is not None:
+        from numba.core import event
+
+        parts = {id(d.py_func): part for part, d in _dispatchers()}
+        order = [part for part, _ in ENTRY_POINTS]
+        seen: set[str] = set()
+
+        class _Listener(event.Listener):
+            def on_start(self, ev):
+                part = parts.get(id(getattr(ev.data.get("dispatcher"), "py_func", None)))
+                if part is not None and part not in seen:
+                    seen.add(part)
+                    progress(part, order.index(part) + 1, len(order))
+
+            def on_end(self, ev):
+                pass
+
+        listener = _Listener()
+        event.register("numba:compile", listener)
+    try:
+        from ..figures.patterns import pattern
+        from ..pipeline import trace_and_verify
+        from ..tracing.sections import TraceOptions
+
+        trace_and_verify(pattern("circle"), options=TraceOptions())
+    finally:
+        if listener is not None:
+            event.unregister("numba:compile", listener)
+    return time.perf_counter() - start

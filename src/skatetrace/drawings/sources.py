@@ -1,0 +1,263 @@
+"""From whatever the user names to a traceable :class:`~skatetrace.figures.figure.Figure`.
+
+A figure can be named as
+
+- a built-in pattern (``double-flower``, ...): exact arcs in the paper's model units;
+- ``school:NAME`` (``school:paragraph-three``): a school figure sized for a skater, exact arcs in
+  metres with the SI skater preset;
+- a figure JSON file (``skatetrace.figure/1``): exact arcs as written;
+- a drawing: an SVG file or a point list (``.csv``, ``.txt``, ``.dat``), or a
+  :class:`~skatetrace.drawings.curves.Drawing` made in Python; it is scaled to ``size`` and fitted by arc
+  splines within ``tol`` (a certified Hausdorff distance). In *exact mode* (``exact=...``) its
+  smooth runs are instead traced as curvature splines (:mod:`skatetrace.drawings.exact`) within a far
+  smaller distance; the arc fit is still made, so that both deviations can be shown.
+
+:func:`resolve` returns the figure with the fit (if any), the unit of length and notes. The CLI and
+notebooks share it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .curves import Drawing
+from ..errors import SkatetraceError
+from ..figures.figure import Figure, load_figure
+from ..dynamics.model import SleighParams
+from ..figures.patterns import pattern, pattern_names
+
+__all__ = ["Resolved", "resolve", "DRAWING_SUFFIXES", "DEFAULT_REL_TOL", "DEFAULT_EXACT_REL_TOL"]
+
+DRAWING_SUFFIXES = (".svg", ".csv", ".txt", ".dat")
+#: Fitting tolerance, as a fraction of the figure's size, when none is given.
+DEFAULT_REL_TOL = 1e-3
+#: Exact mode's tolerance for the curvature spline, as a fraction of the figure's size: a tenth of
+#: the default verification tolerance, so that the replay, not the representation, limits the match.
+DEFAULT_EXACT_REL_TOL = 1e-7
+#: Arc mode's corner tolerance (degrees): joins turning by less are smooth. Exact mode uses less.
+EXACT_MAX_CORNER_DEG = 0.5
+#: Smallest arc-fitting tolerance, as a fraction of the figure's size: the certified fit needs
+#: about 17 s per example drawing at 1e-9 and does not finish in minutes at 1e-12. Exact mode
+#: (curvature splines) reaches far smaller distances quickly.
+MIN_REL_TOL = 1e-8
+#: Sizes a drawing may be scaled to (metres or model units); its pieces must then lie within the
+#: figure limits of :mod:`skatetrace.figures.figure` (lengths 1e-9 to 1e9).
+MIN_SIZE, MAX_SIZE = 1e-6, 1e6
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Resolved:
+    """A figure ready to trace, and how it was obtained.
+
+    Attributes
+    ----------
+    figure : Figure
+    kind : str
+        ``"pattern"``, ``"school"``, ``"json"`` or ``"drawing"``.
+    unit : str
+        ``"m"`` (lengths in metres, SI parameters) or ``"model"`` (the paper's units).
+    fit : DrawingFit or None
+        For drawings: the arc-spline fit with its certified Hausdorff bound.
+    drawing : Drawing or None
+        For drawings: the drawing as fitted (after scaling).
+    tol : float or None
+        The arc-fitting tolerance used (figure units).
+    exact : ExactDrawingFit or None
+        Exact mode: the curvature splines the figure is made of, with their measured deviation.
+    exact_tol : float or None
+        Exact mode: the tolerance of the curvature splines (figure units).
+    notes : tuple of str
+    """
+
+    figure: Figure
+    kind: str
+    unit: str
+    fit: object | None = None
+    drawing: Drawing | None = None
+    tol: float | None = None
+    exact: object | None = None
+    exact_tol: float | None = None
+    notes: tuple = field(default=())
+
+    @property
+    def representation_error(self) -> float | None:
+        """Distance bound between the traced figure's pieces and the drawing (``None`` if not a drawing)."""
+        if self.exact is not None:
+            return self.exact.deviation
+        return None if self.fit is None else self.fit.hausdorff
+
+    @property
+    def representation_tol(self) -> float | None:
+        """Tolerance of the traced figure's pieces (the exact tolerance in exact mode)."""
+        return self.exact_tol if self.exact is not None else self.tol
+
+
+def _size(size) -> tuple[float | None, str | None]:
+    if size is None:
+        return None, None
+    if isinstance(size, (int, float)) and not isinstance(size, bool):
+        if not (size > 0 and math.isfinite(size)):
+            raise SkatetraceError(f"size must be a positive length, got {size!r}")
+        value, unit = float(size), "model"
+    else:
+        from .inputs import parse_length
+
+        try:
+            value, unit = parse_length(str(size))
+        except SkatetraceError as exc:
+            raise SkatetraceError(f"size: {exc}") from None
+    _check_size(value, f"size {size!r}")
+    return value, unit
+
+
+def _check_size(value: float, what: str) -> None:
+    if not MIN_SIZE <= value <= MAX_SIZE:
+        raise SkatetraceError(f"{what} is {value:.3g} across; a drawing must be scaled to between {MIN_SIZE:g} and "
+                              f"{MAX_SIZE:g} (metres or model units), e.g. --size 6m")
+
+
+def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL, floor: float = 0.0) -> float:
+    if tol is None:
+        return default * size
+    if isinstance(tol, (int, float)) and not isinstance(tol, bool):
+        value, tunit = float(tol), unit
+    else:
+        from .inputs import parse_length
+
+        try:
+            value, tunit = parse_length(str(tol))
+        except SkatetraceError as exc:
+            raise SkatetraceError(f"tolerance: {exc}") from None
+        if tunit == "model":
+            tunit = unit
+    if tunit != unit:
+        raise SkatetraceError(f"tolerance {tol!r} is in {tunit} but the figure is in {unit} units; "
+                              "give both in metres (e.g. --size 6m --tol 1mm) or both without a unit")
+    if not (value > 0 and math.isfinite(value)):
+        raise SkatetraceError(f"tolerance must be a positive length, got {tol!r}")
+    if value < floor * size:
+        raise SkatetraceError(f"tolerance {tol!r} is below {floor:g} of the figure's size ({floor * size:.3g} {unit}); "
+                              "for closer fits use exact mode (--exact)")
+    return value
+
+
+def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "greedy", height: float = 1.7,
+            blade: float = 0.28, edge: str = "outside", direction: str = "forward", foot: str = "right",
+            body_mass: float = 60.0, exact=None) -> Resolved:
+    """Turn a name, a file or a drawing into a figure to trace.
+
+    Parameters
+    ----------
+    spec : str, path or Drawing
+        See the module docstring.
+    size : str or float, optional
+        Drawings only: the larger side of the figure after scaling, e.g. ``"6m"`` (metres, SI
+        skater) or ``12`` (model units). Default: the drawing's own units, as model units.
+    tol : str or float, optional
+        Drawings only: fitting tolerance (Hausdorff distance), in the figure's units or with a
+        unit (``"1mm"``). Default ``1e-3`` of the figure's size.
+    method : {"greedy", "min"}
+        Arc-spline fit (:func:`skatetrace.drawings.fitting.fit_drawing`).
+    exact : None, True, str or float
+        Drawings only: trace the smooth runs exactly, as curvature splines
+        (:func:`skatetrace.drawings.exact.fit_exact_drawing`), within this distance (as ``tol``; ``True``:
+        ``1e-7`` of the figure's size). ``None`` or ``False``: arcs and lines.
+    height, blade, edge, direction, foot : school figures (:func:`skatetrace.figures.school.school_figure`).
+    body_mass : float
+        kg, for the SI skater preset used with figures in metres.
+
+    Raises
+    ------
+    SkatetraceError
+        Unknown name, unreadable file, bad size or tolerance, or a fit that is not within ``tol``
+        (the message says where it failed).
+    """
+    from ..dynamics.presets import skater_params
+
+    if isinstance(spec, Drawing):
+        return _drawing(spec, size, tol, method, body_mass, height, exact)
+    name = str(spec)
+    if name.startswith("school:"):
+        from ..figures.school import school_figure
+
+        fig = school_figure(name.split(":", 1)[1], height=height, blade=blade, edge=edge, direction=direction,
+                            foot=foot, params=skater_params(body_mass, height))
+        return Resolved(figure=fig, kind="school", unit="m",
+                        notes=(f"school figure for a skater {height:g} m tall, {body_mass:g} kg (SI units)",
+                               *_exact_note(exact)))
+    if name in pattern_names():
+        return Resolved(figure=pattern(name), kind="pattern", unit="model", notes=_exact_note(exact))
+    path = Path(name)
+    suffix = path.suffix.lower()
+    if suffix in DRAWING_SUFFIXES:
+        from .inputs import load_drawing
+
+        return _drawing(load_drawing(path), size, tol, method, body_mass, height, exact)
+    if suffix == ".json" or path.exists():
+        return Resolved(figure=load_figure(path), kind="json", unit="model", notes=_exact_note(exact))
+    raise SkatetraceError(
+        f"unknown figure {name!r}: not a built-in ({', '.join(pattern_names())}), not school:NAME "
+        f"(see 'skatetrace figures') and no such file (.json figure, or a drawing: {', '.join(DRAWING_SUFFIXES)})")
+
+
+def _merged(fig: Figure) -> Figure:
+    """The figure with consecutive arcs of one radius made one piece (they trace faster as one)."""
+    return Figure(fig.name, tuple(c.merged() for c in fig.curves), fig.params, fig.description, fig.provenance,
+                  fig.extra)
+
+
+def _exact_note(exact) -> tuple[str, ...]:
+    if exact is None or exact is False:
+        return ()
+    return ("exact mode applies to drawings; this figure's arcs, lines and spirals are traced as given",)
+
+
+def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float, exact=None) -> Resolved:
+    from .fitting import figure_from_fit, fit_drawing
+    from ..dynamics.presets import skater_params
+
+    value, unit = _size(size)
+    notes = list(drawing.notes)
+    if value is not None:
+        drawing = drawing.scaled_to(value, unit)
+        notes.append(f"scaled to {value:g} {unit} across")
+    else:
+        unit = "model"
+        notes.append(f"kept the drawing's own units ({drawing.size():.4g} across) as model units")
+    fsize = drawing.size()
+    if value is None:
+        _check_size(fsize, f"the drawing {drawing.name!r}, in its own units,")
+    tol_v = _tol(tol, unit, fsize, floor=MIN_REL_TOL)
+    fit = fit_drawing(drawing, tol_v, method=method)
+    if not fit.success:
+        raise SkatetraceError(f"could not fit {drawing.name!r} within {tol_v:.3g}: {fit.message}")
+    params = skater_params(body_mass, height) if unit == "m" else SleighParams()
+    notes.append(f"arc mode: {fit.n_arcs} arcs and {fit.n_lines} lines within {fit.hausdorff:.3g} "
+                 f"(certified; tolerance {tol_v:.3g} {unit})")
+    if exact is None or exact is False:
+        fig = _merged(figure_from_fit(fit, name=drawing.name, params=params))
+        return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v,
+                        notes=tuple(notes))
+    from .exact import figure_from_exact, fit_exact_drawing
+
+    exact_v = _tol(None if exact is True else exact, unit, fsize, DEFAULT_EXACT_REL_TOL)
+    # A join whose tangent turns by delta displaces the rest of the path by about delta times its
+    # length, so in exact mode any kink that could cost a tenth of the tolerance is a corner.
+    length = sum(p.length() for p in drawing.paths)
+    corner_tol = min(EXACT_MAX_CORNER_DEG, math.degrees(exact_v / (10.0 * length)))
+    ex = fit_exact_drawing(drawing, exact_v, corner_tol_deg=corner_tol)
+    if not ex.success:
+        raise SkatetraceError(f"could not represent {drawing.name!r} exactly within {exact_v:.3g}: {ex.message}")
+    fig = _merged(figure_from_exact(ex, name=drawing.name, params=params))
+    notes.append(f"exact mode: {ex.n_spirals} spirals, {ex.n_arcs} arcs and {ex.n_lines} lines within "
+                 f"{ex.deviation:.3g} (measured; tolerance {exact_v:.3g} {unit})")
+    kinks = [abs(r.corner) for pf in ex.paths for r in pf.runs
+             if r.corner is not None and 0.0 < abs(r.corner) <= math.radians(EXACT_MAX_CORNER_DEG)]
+    if kinks:
+        notes.append(f"exact mode: {len(kinks)} join(s) of the drawing are not tangent-continuous (they turn by "
+                     f"up to {math.degrees(max(kinks)):.2g} degrees); the skater stops and pivots there, where "
+                     "arc mode glides through")
+    return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v, exact=ex,
+                    exact_tol=exact_v, notes=tuple(notes))

@@ -1,0 +1,524 @@
+"""A compiled DOP853 integrator for the sleigh held on a curve (the manoeuvre solves).
+
+A manoeuvre solve integrates many times (a bracketing scan, then the root's refinement), so the
+integration dominates the time of a trace. This module is scipy's DOP853
+(:class:`scipy.integrate.DOP853`) step for step (the same coefficients, error norm, step-size
+control, initial step, event rule and 7th-order dense output), specialised to the
+constrained system of :mod:`skatetrace.tracing.maneuver` and compiled with numba. A test compares it with
+``solve_ivp(method="DOP853")`` on the same problem.
+
+The system integrated is ``y = (p1, p2, a, b, s)`` under the ramp control ``u = alpha t`` through
+*legs*: a leg ends where ``|s|`` reaches its switch length and the next one starts from that state
+(a smooth join). On each leg the curvature is a cubic polynomial of the distance travelled since
+the leg started::
+
+    kappa(sigma) = c0 + c1 sigma + c2 sigma^2 + c3 sigma^3,    sigma = |s| - s_start,
+
+with ``s_start`` the previous leg's switch length (0 for the first leg); a leg of constant
+curvature is ``c1 = c2 = c3 = 0``. A leg that begins where the curvature jumps starts with scipy's
+initial step, as a new ``solve_ivp`` call would; one that continues the curvature (a chain of
+spirals) keeps the step size the previous leg proposed, which saves most of a restart per join. The curvature condition ``xi1 = kappa(s) xi2`` is algebraic, so
+only ``kappa(s)`` (not its derivative) enters the right-hand side, the events and the step control.
+Two terminal events may be armed: the speed along the blade vanishing (``"stopped"``) and the mass
+coming within a distance of the singular point ``(0, -kappa(s) I / M)`` (``"singular"``).
+
+Set the environment variable ``NUMBA_DISABLE_JIT=1`` to run the same code as plain Python.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from . import dop853 as rk
+from .model import SleighParams
+
+__all__ = ["DenseSolution", "IntegrationResult", "integrate_legs"]
+
+# scipy's DOP853 tableau (:mod:`skatetrace.dynamics.dop853`, shared with the compiled replay)
+_NS, _A, _B, _C = rk.N_STAGES, rk.A, rk.B, rk.C
+_A_EXTRA, _C_EXTRA, _POWER = rk.A_EXTRA, rk.C_EXTRA, rk.POWER
+
+# Status codes of the compiled loop
+_REACHED, _STOPPED, _SINGULAR = 0, 1, 2
+_EXHAUSTED, _SMALL_STEP, _NONFINITE = -1, -2, -3
+_MESSAGES = {
+    _REACHED: "reached the end of the interval",
+    _STOPPED: "the speed along the blade vanished",
+    _SINGULAR: "the mass reached the singular point's neighbourhood",
+    _EXHAUSTED: "step size collapsed (evaluation budget exhausted or the control law is singular)",
+    _SMALL_STEP: "required step size is less than spacing between numbers",
+    _NONFINITE: "the state became non-finite",
+}
+
+
+@njit(cache=True)
+def _curvature(coef, s0, s):
+    """The leg's curvature at arc length ``s``: Horner's rule in ``sigma = |s| - s0``.
+
+    ``coef`` holds ``(c0, c1, c2, c3)``; with ``c1 = c2 = c3 = 0`` the result is ``c0`` exactly.
+    """
+    sigma = abs(s) - s0
+    return coef[0] + sigma * (coef[1] + sigma * (coef[2] + sigma * coef[3]))
+
+
+@njit(cache=True)
+def _rhs(M, m, I, kappa, alpha, t, y, out):
+    """Right-hand side of ``(p1, p2, a, b, s)`` for the curvature ``kappa`` given at ``y``.
+
+    Returns False at the singular point itself.
+    """
+    p1, p2, a, b = y[0], y[1], y[2], y[3]
+    u = alpha * t
+    Mm = M + m
+    c_a = m * (M * b + kappa * (I + m * a * a))
+    c_b = m * a * (kappa * m * b - Mm)
+    c_0 = (Mm - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
+    n2 = c_a * c_a + c_b * c_b
+    if not n2 > 0.0:
+        return False
+    n = math.sqrt(n2)
+    ad = -u * c_b / n - c_0 * c_a / n2
+    bd = u * c_a / n - c_0 * c_b / n2
+    D = Mm * (I + m * a * a) + M * m * b * b
+    q = p1 - m * a * bd
+    r = p2 + M * ad
+    xi1 = (Mm * q + m * b * r) / D
+    xi2 = (m * (b * q - (I + m * a * a) * ad) + (I + m * (a * a + b * b)) * p2) / D
+    eta = ((M * m * b * b + I * Mm) * bd + a * (Mm * p1 + m * b * r)) / D
+    out[0] = -m * eta * xi2
+    out[1] = m * eta * xi1
+    out[2] = ad
+    out[3] = bd
+    out[4] = xi2
+    return True
+
+
+@njit(cache=True)
+def _rhs_leg(M, m, I, coef, s0, alpha, t, y, out):
+    """:func:`_rhs` on a leg with curvature coefficients ``coef`` starting at ``|s| = s0``."""
+    return _rhs(M, m, I, _curvature(coef, s0, y[4]), alpha, t, y, out)
+
+
+@njit(cache=True)
+def _speed(M, m, I, coef, s0, alpha, t, y, work):
+    """Speed along the blade ``xi2`` (the ``"stopped"`` event); NaN at the singular point.
+
+    ``work`` is a scratch array of 5 (the event is evaluated in tight loops: no allocation).
+    """
+    if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, work):
+        return np.nan
+    return work[4]
+
+
+@njit(cache=True)
+def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g, work):
+    """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit.
+
+    The singular point ``(0, -kappa I / M)`` moves with the curvature at ``y``'s ``|s|``.
+    ``work`` is a scratch array of 5.
+    """
+    g[0] = abs(y[4]) - switch
+    g[1] = _speed(M, m, I, coef, s0, alpha, t, y, work) if stop_event else 1.0
+    if sing_limit > 0.0:
+        sing_b = -_curvature(coef, s0, y[4]) * I / M
+        g[2] = math.hypot(y[2], y[3] - sing_b) - sing_limit
+    else:
+        g[2] = 1.0
+
+
+@njit(cache=True)
+def _dense_coefficients(M, m, I, coef, s0, alpha, t_old, h, y_old, y_new, f_new, K, Kx, ytmp, F):
+    """The interpolant's coefficients ``F`` (7 x n) for the step just taken (3 extra stages).
+
+    ``Kx`` (16 x n) and ``ytmp`` (n) are scratch arrays and ``F`` is written in place. Scalar
+    loops, no temporaries (this runs on every step of a dense integration): the same operations
+    in the same order as the array form of scipy's ``_dense_output_impl``.
+    """
+    n = y_old.size
+    for s in range(_NS + 1):
+        for i in range(n):
+            Kx[s, i] = K[s, i]
+    for s in range(_NS + 1, 16):
+        row = s - _NS - 1
+        for i in range(n):
+            dy = 0.0
+            for j in range(s):
+                dy += _A_EXTRA[row, j] * Kx[j, i]
+            ytmp[i] = y_old[i] + dy * h
+        _rhs_leg(M, m, I, coef, s0, alpha, t_old + _C_EXTRA[row] * h, ytmp, Kx[s])
+    rk.dense_coefficients(Kx, h, y_old, y_new, f_new, F)
+    return F
+
+
+@njit(cache=True)
+def _initial_step(M, m, I, coef, s0, alpha, t0, y0, f0, t_bound, direction, rtol, atol):
+    """scipy's ``select_initial_step`` for an 8th-order method (error estimator order 7)."""
+    interval = abs(t_bound - t0)
+    if interval == 0.0:
+        return 0.0
+    h0, d1, scale = rk.initial_step_trial(y0, f0, interval, rtol, atol)
+    y1 = y0 + h0 * direction * f0
+    f1 = np.empty(y0.size)
+    _rhs_leg(M, m, I, coef, s0, alpha, t0 + h0 * direction, y1, f1)
+    return rk.initial_step(h0, d1, scale, f0, f1, interval)
+
+
+@njit(cache=True)
+def _grow(arr, n):
+    # Element by element, here and wherever compiled code copies arrays: numba compiles an array-to-slice
+    # assignment with its broadcasting and shape-mismatch error formatting (string code), seconds of a
+    # first run's compilation for nothing (a copy is a copy).
+    out = np.empty((2 * arr.shape[0],) + arr.shape[1:])
+    flat_out = out.reshape(-1)
+    flat_in = arr.reshape(-1)
+    for i in range(n * (flat_in.size // max(arr.shape[0], 1))):
+        flat_out[i] = flat_in[i]
+    return out
+
+
+@njit(cache=True)
+def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, sing_limit, max_nfev, dense):
+    """Integrate through the legs; see :func:`integrate_legs`.
+
+    ``kappas`` is the (nlegs, 4) array of curvature coefficients ``c0..c3`` of the legs.
+    Returns ``(status, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps)``.
+    """
+    n = y0.size
+    nlegs = kappas.shape[0]
+    direction = 1.0 if t_end >= 0.0 else -1.0
+    t = 0.0
+    y = y0.copy()
+    leg_bounds = np.empty(nlegs + 1)
+    leg_bounds[0] = 0.0
+    cap = 64 if dense else 1
+    step_t = np.empty(cap)
+    step_h = np.empty(cap)
+    step_y = np.empty((cap, n))
+    step_F = np.empty((cap, _POWER, n))
+    step_leg = np.empty(cap)
+    nsteps = np.int64(0)  # not the literal 0: numba would compile _grow for Literal[int](0) as well as int64
+    nfev = 0
+    K = np.empty((_NS + 1, n))
+    ytmp = np.empty(n)
+    ynew = np.empty(n)
+    kstage = np.empty(n)
+    f = np.empty(n)
+    f_new = np.empty(n)
+    g_old = np.empty(3)
+    g_new = np.empty(3)
+    g = np.empty(3)
+    work = np.empty(n)  # scratch of the event functions
+    yint = np.empty(n)  # the dense output at a bisection point
+    Kx = np.empty((16, n))  # scratch of the dense output's extra stages
+    F_step = np.zeros((_POWER, n))  # the dense output of the current step, when it has one
+    F_none = np.zeros((_POWER, n))  # stands for "no dense output" on steps that need none
+    h_abs = 0.0
+    for leg in range(nlegs):
+        coef = kappas[leg]  # a view: (c0, c1, c2, c3) of this leg
+        s0 = switches[leg - 1] if leg > 0 else 0.0  # |s| where this leg starts
+        switch = switches[leg]
+        if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, f):
+            return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+        nfev += 1
+        _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g_old, work)
+        # Where the curvature is continuous across the join (a chain of spirals) the right-hand side
+        # is too, and the step size the last leg proposed carries over; where it jumps the control
+        # rates jump, and the step is chosen afresh as scipy would for a new solve_ivp call.
+        smooth = False
+        if leg > 0:
+            s_prev = switches[leg - 2] if leg > 1 else 0.0
+            k_end = _curvature(kappas[leg - 1], s_prev, s0)
+            smooth = abs(k_end - coef[0]) <= 1e-12 * max(abs(k_end), abs(coef[0]), 1e-300)
+        if not smooth:
+            h_abs = _initial_step(M, m, I, coef, s0, alpha, t, y, f, t_end, direction, rtol, atol)
+            nfev += 1
+        while True:
+            if direction * (t_end - t) <= 0.0:
+                leg_bounds[leg + 1] = t
+                return _REACHED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+            min_step = 10.0 * abs(np.nextafter(t, direction * np.inf) - t)
+            if h_abs < min_step:
+                h_abs = min_step
+            accepted = False
+            rejected = False
+            while not accepted:
+                if h_abs < min_step:
+                    return _SMALL_STEP, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+                h = h_abs * direction
+                t_new = t + h
+                if direction * (t_new - t_end) > 0.0:
+                    t_new = t_end
+                h = t_new - t
+                h_abs = abs(h)
+                # one Runge-Kutta step (scipy's rk_step), written out without temporaries
+                for i in range(n):
+                    K[0, i] = f[i]
+                ok = True
+                for s in range(1, _NS):
+                    for i in range(n):
+                        acc = 0.0
+                        for j in range(s):
+                            acc += _A[s, j] * K[j, i]
+                        ytmp[i] = y[i] + acc * h
+                    if not _rhs_leg(M, m, I, coef, s0, alpha, t + _C[s] * h, ytmp, kstage):
+                        ok = False
+                    for i in range(n):
+                        K[s, i] = kstage[i]
+                nfev += _NS
+                for i in range(n):
+                    acc = 0.0
+                    for j in range(_NS):
+                        acc += _B[j] * K[j, i]
+                    ynew[i] = y[i] + h * acc
+                if not _rhs_leg(M, m, I, coef, s0, alpha, t + h, ynew, f_new):
+                    ok = False
+                nfev += 1
+                if not ok or nfev > max_nfev:
+                    return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+                for i in range(n):
+                    K[_NS, i] = f_new[i]
+                err = rk.error_norm(K, y, ynew, h_abs, rtol, atol)
+                h_abs *= rk.step_factor(err, rejected)
+                accepted = err < 1.0
+                rejected = not accepted
+            finite = True
+            for i in range(n):
+                if not math.isfinite(ynew[i]):
+                    finite = False
+            if not finite:
+                return _NONFINITE, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+            # events: a sign change (or touch of zero) between the step's ends, as in solve_ivp
+            _event_values(M, m, I, coef, s0, alpha, t_new, ynew, switch, stop_event, sing_limit, g_new, work)
+            active = False
+            for e in range(3):
+                if (g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0):
+                    active = True
+            F = F_none
+            if dense or active:
+                F = _dense_coefficients(M, m, I, coef, s0, alpha, t, h, y, ynew, f_new, K, Kx, ytmp, F_step)
+                nfev += 3
+            hit = -1
+            t_hit = t_new
+            if active:
+                for e in range(3):
+                    if not ((g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0)):
+                        continue
+                    # bisection on the dense output down to adjacent floating-point numbers
+                    lo, hi = t, t_new
+                    glo = g_old[e]
+                    for _ in range(200):
+                        mid = 0.5 * (lo + hi)
+                        if mid == lo or mid == hi:
+                            break
+                        _event_values(M, m, I, coef, s0, alpha, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
+                                      stop_event, sing_limit, g, work)
+                        if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
+                            lo, glo = mid, g[e]
+                        else:
+                            hi = mid
+                    root = hi if glo != 0.0 else lo
+                    if hit < 0 or direction * (root - t_hit) < 0.0:
+                        hit, t_hit = e, root
+            if dense:
+                if nsteps == step_t.size:
+                    step_t = _grow(step_t, nsteps)
+                    step_h = _grow(step_h, nsteps)
+                    step_y = _grow(step_y, nsteps)
+                    step_F = _grow(step_F, nsteps)
+                    step_leg = _grow(step_leg, nsteps)
+                step_t[nsteps] = t
+                step_h[nsteps] = h
+                for i in range(n):
+                    step_y[nsteps, i] = y[i]
+                for r in range(_POWER):
+                    for i in range(n):
+                        step_F[nsteps, r, i] = F[r, i]
+                step_leg[nsteps] = leg
+                nsteps += 1
+            if hit >= 0:
+                yh = rk.interpolate_into(t, h, y, F, t_hit, np.empty(n))
+                if hit == 0 and leg + 1 < nlegs:
+                    t, y = t_hit, yh
+                    leg_bounds[leg + 1] = t
+                    break  # next leg, from the join
+                leg_bounds[leg + 1] = t_hit
+                status = _REACHED if hit == 0 else (_STOPPED if hit == 1 else _SINGULAR)
+                return status, leg, t_hit, yh, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+            t = t_new
+            for i in range(n):
+                y[i] = ynew[i]
+                f[i] = f_new[i]
+            for e in range(3):
+                g_old[e] = g_new[e]
+    return _REACHED, nlegs - 1, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
+
+
+@njit(cache=True)
+def _evaluate_steps(t_old, h, y_old, F, steps, t):
+    """The dense output at times ``t``, each on its step ``steps[k]``: shape ``(t.size, n)``.
+
+    :func:`skatetrace.dynamics.dop853.interpolate_into` point by point (the same operations as scipy's
+    vectorised form): this samples thousands of points per section.
+    """
+    out = np.empty((t.size, y_old.shape[1]))
+    for p in range(t.size):
+        i = steps[p]
+        rk.interpolate_into(t_old[i], h[i], y_old[i], F[i], t[p], out[p])
+    return out
+
+
+class DenseSolution:
+    """Piecewise DOP853 interpolant of one leg, callable like scipy's ``OdeSolution``.
+
+    ``sol(t)`` returns shape ``(5,)`` for a scalar ``t`` and ``(5, n)`` for an array; times
+    outside the steps are extrapolated from the nearest step (as scipy does).
+    """
+
+    __slots__ = ("t_old", "h", "y_old", "F", "_ends")
+
+    def __init__(self, t_old: np.ndarray, h: np.ndarray, y_old: np.ndarray, F: np.ndarray):
+        order = np.argsort(t_old) if h.size and h[0] < 0 else np.arange(t_old.size)
+        self.t_old, self.h, self.y_old, self.F = t_old[order], h[order], y_old[order], F[order]
+        self._ends = np.minimum(self.t_old, self.t_old + self.h)  # left end of each step
+
+    def __getstate__(self):
+        return (self.t_old, self.h, self.y_old, self.F)
+
+    def __setstate__(self, state):
+        self.__init__(*state)
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        scalar = t.ndim == 0
+        tt = np.atleast_1d(t)
+        i = np.clip(np.searchsorted(self._ends, tt, side="right") - 1, 0, self._ends.size - 1)
+        y = _evaluate_steps(self.t_old, self.h, self.y_old, self.F, i, tt)
+        return y[0] if scalar else y.T
+
+
+@dataclass(frozen=True, slots=True)
+class IntegrationResult:
+    """Outcome of :func:`integrate_legs`.
+
+    ``status`` is 0 (reached ``t_end``, or the last join with no leg after it), ``"stopped"`` or
+    ``"singular"`` for a terminal event, or a negative code for a failure (see ``message``).
+    ``leg_bounds`` are the times at which each leg started and the last one ended; ``legs`` the
+    dense solutions (``dense=True`` and no failure only), one per leg entered.
+    """
+
+    status: int
+    hit: str | None
+    message: str
+    t: float
+    y: np.ndarray
+    leg_bounds: np.ndarray
+    legs: tuple[DenseSolution, ...]
+
+    @property
+    def nlegs(self) -> int:
+        return self.leg_bounds.size - 1
+
+
+def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_end: float, *,
+                   rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
+                   max_nfev: int = 150_000, dense: bool = False) -> IntegrationResult:
+    """Integrate ``(p1, p2, a, b, s)`` from ``t = 0`` under ``u = alpha t`` through legs.
+
+    Leg ``k`` runs from ``|s| = s_start`` (``switches[k - 1]``, or 0 for the first leg) to
+    ``|s| = switches[k]`` and holds the curvature::
+
+        kappa(sigma) = c0 + c1 sigma + c2 sigma^2 + c3 sigma^3,    sigma = |s| - s_start,
+
+    evaluated at the current state's ``|s|`` (``s`` runs negative backwards in time, hence the
+    absolute value).
+
+    Parameters
+    ----------
+    params : SleighParams
+    y0 : array_like, shape (5,)
+        Initial state ``(p1, p2, a, b, s)``.
+    kappas : array_like, shape (n,) or (n, 4)
+        Curvature of each leg: shape ``(n,)`` gives a constant curvature per leg (the same as
+        ``c0`` with ``c1 = c2 = c3 = 0``); shape ``(n, 4)`` gives the polynomial coefficients
+        ``(c0, c1, c2, c3)`` of each leg.
+    switches : array_like, shape (n,)
+        The cumulative ``|s|`` at which each leg ends (``inf`` for the last).
+    alpha : float
+        Slope of the ramp control ``u = alpha t``.
+    t_end : float
+        Final time; negative integrates backwards.
+    rtol, atol : float
+        Tolerances of the step-size control.
+    stop_event : bool
+        End where the speed along the blade vanishes.
+    singular_limit : float
+        If positive, end where the mass comes within this distance of the singular point
+        ``(0, -kappa I / M)``, with ``kappa`` the curvature at the current ``|s|``.
+    max_nfev : int
+        Budget of right-hand-side evaluations; running out means the step size collapsed.
+    dense : bool
+        Keep the dense output of every step.
+
+    Returns
+    -------
+    IntegrationResult
+
+    Raises
+    ------
+    ValueError
+        If ``kappas`` is neither of shape ``(n,)`` nor ``(n, 4)``, if ``switches`` is not of
+        shape ``(n,)`` with the same ``n``, or if there is no leg.
+    """
+    kap = np.asarray(kappas, dtype=float)
+    sw = np.ascontiguousarray(switches, dtype=float)
+    if kap.ndim == 1:
+        coef = np.zeros((kap.shape[0], 4))
+        coef[:, 0] = kap
+    elif kap.ndim == 2 and kap.shape[1] == 4:
+        coef = np.ascontiguousarray(kap)
+    else:
+        raise ValueError(f"kappas must have shape (n,) (constant curvature per leg) or (n, 4) "
+                         f"(cubic coefficients c0..c3 per leg), got shape {kap.shape}")
+    if sw.ndim != 1 or sw.shape[0] != coef.shape[0]:
+        raise ValueError(f"switches must have shape ({coef.shape[0]},) to match the {coef.shape[0]} legs of "
+                         f"kappas, got shape {sw.shape}")
+    if coef.shape[0] == 0:
+        raise ValueError("at least one leg is required")
+    y = np.asarray(y0, dtype=float).copy()
+    out = _run(params.M, params.m, params.I, y, coef, sw, float(alpha), float(t_end), float(rtol), float(atol),
+               bool(stop_event), float(singular_limit), int(max_nfev), bool(dense))
+    status, leg, t, yf, bounds, st, sh, sy, sF, sleg, ns = out
+    nlegs = int(leg) + 1
+    legs = ()
+    if dense and status >= 0:
+        legs = tuple(
+            DenseSolution(st[:ns][sel], sh[:ns][sel], sy[:ns][sel], sF[:ns][sel])
+            for sel in (sleg[:ns] == k for k in range(nlegs))
+        )
+    bounds = np.array(bounds[:nlegs + 1])
+    bounds[-1] = t  # where the last leg entered ended (unset by a failure)
+    hit = {_STOPPED: "stopped", _SINGULAR: "singular"}.get(int(status))
+    code = 0 if status >= 0 else int(status)
+    return IntegrationResult(status=code, hit=hit, message=_MESSAGES[int(status)], t=float(t), y=np.asarray(yf),
+                             leg_bounds=bounds, legs=legs)
+
+
+def final_state(params: SleighParams, y0: np.ndarray, coef: np.ndarray, switches: np.ndarray, alpha: float,
+                t_end: float, *, rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
+                max_nfev: int = 150_000) -> tuple[str | None, float, np.ndarray]:
+    """Where :func:`integrate_legs` ends, without its checks and bookkeeping (no dense output).
+
+    For the many short integrations of a manoeuvre solve. ``coef`` must be a float array of shape
+    ``(n, 4)`` and ``switches`` one of shape ``(n,)``, as :func:`integrate_legs` makes them.
+    Returns ``(outcome, t, y)``: ``outcome`` is ``"stopped"`` or ``"singular"`` for a terminal
+    event, ``"reached"`` for the end of the interval (or of the last leg) and ``None`` for a failure.
+    """
+    out = _run(params.M, params.m, params.I, y0, coef, switches, float(alpha), float(t_end), float(rtol),
+               float(atol), bool(stop_event), float(singular_limit), int(max_nfev), False)
+    status = int(out[0])
+    outcome = {_REACHED: "reached", _STOPPED: "stopped", _SINGULAR: "singular"}.get(status)
+    return outcome, float(out[2]), np.asarray(out[3])

@@ -1,0 +1,193 @@
+"""Trace, verify, and bring the skater to rest at smooth joins where a replay strays.
+
+A section is traced from rest to rest by one launch, one glide and one stop, so on a section of
+many pieces the launch or the stop runs through several of them. The full dynamics amplifies
+small errors of the controls along such a manoeuvre (a sleigh moving with its mass far behind
+the contact point is unstable), and the independent replay of a long section may stray from the
+figure by more than verification allows although the trace itself is exact. A *rest* at a
+smooth join (a cusp without pivot, :data:`~skatetrace.figures.figure.REST`: the path on the ice is the
+same) splits the section in two, each with shorter manoeuvres.
+
+:func:`trace_and_verify` traces and verifies a figure and, with ``rests="auto"``, where a
+section fails (not traced, replay too far from the figure, or not at rest at its ends) adds a
+rest at the smooth join nearest the middle of it and of every section before it on its curve
+(the replay carries errors from one section into the next), then traces and verifies again,
+until everything passes or no such section has a smooth join left. ``rests="never"`` traces the
+figure as given, ``rests="joins"`` rests at every smooth join.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, Iterable
+
+import numpy as np
+
+from .dynamics.controls import ControlSchedule
+from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
+from .figures.figure import Figure, Section
+from .dynamics.model import SleighParams
+from .tracing.sections import FigureTrace, TraceOptions, trace_figure
+from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
+
+__all__ = ["REST_POLICIES", "VerifiedTrace", "add_rests", "middle_join", "trace_and_verify"]
+
+REST_POLICIES = ("auto", "never", "joins")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class VerifiedTrace:
+    """A traced figure with its controls and its verification.
+
+    ``figure`` is the figure as traced: the input with the rests of ``rests`` added, as
+    ``(curve index, piece index)`` of the piece after each rest. ``rounds`` counts the
+    trace-and-verify passes. ``feasibility`` is the second verdict: could a skater make these
+    controls (:mod:`skatetrace.verification.feasibility`)?  ``success`` is the first one only: traced and
+    verified, exact for the model.
+    """
+
+    figure: Figure
+    trace: FigureTrace
+    schedule: ControlSchedule
+    states: dict[str, np.ndarray]
+    report: VerificationReport
+    rests: tuple[tuple[int, int], ...]
+    rounds: int
+    feasibility: Feasibility | None = None
+
+    @property
+    def success(self) -> bool:
+        return self.trace.success and self.report.success
+
+    @property
+    def status(self) -> str:
+        return "success" if self.success else "failed"
+
+    @property
+    def message(self) -> str:
+        rests = f"; {len(self.rests)} rest(s) added at smooth joins" if self.rests else ""
+        if self.success:
+            return f"traced and verified{rests}"
+        return (self.trace.message if not self.trace.success else self.report.message) + rests
+
+    @property
+    def verdict(self) -> str:
+        """Both verdicts in a line: ``verified · not humanly feasible: mass 32.6 m from the blade (...)``."""
+        verified = self.report.success and self.trace.success
+        if self.feasibility is None:
+            return "verified" if verified else "verification failed"
+        return self.feasibility.verdict(verified)
+
+
+def middle_join(section: Section) -> int | None:
+    """Index of the piece after the smooth join nearest the middle of ``section`` (by arc length).
+
+    ``None`` if the section is a single piece.
+    """
+    if len(section.pieces) < 2:
+        return None
+    half, acc, best = 0.5 * section.length, 0.0, None
+    for before, after in zip(section.pieces[:-1], section.pieces[1:]):
+        acc += before.segment.length
+        if best is None or abs(acc - half) < best[0]:
+            best = (abs(acc - half), after.index)
+    return best[1]
+
+
+def add_rests(figure: Figure, where: Iterable[tuple[int, int]]) -> Figure:
+    """``figure`` with rests at the smooth joins before the pieces ``where`` = ``(curve, piece)``."""
+    by_curve: dict[int, set[int]] = {}
+    for ci, pi in where:
+        by_curve.setdefault(ci, set()).add(pi)
+    if not by_curve:
+        return figure
+    curves = tuple(c.with_rests(by_curve.get(ci, ())) for ci, c in enumerate(figure.curves))
+    return Figure(figure.name, curves, figure.params, figure.description, figure.provenance, dict(figure.extra))
+
+
+def _all_smooth_joins(figure: Figure) -> list[tuple[int, int]]:
+    return [(ci, p.index) for ci, c in enumerate(figure.curves) for p in c.layout()
+            if p.join_before is not None and not p.join_before.is_cusp]
+
+
+def trace_and_verify(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
+                     *, rests: str = "auto", rel_tol: float = 1e-6, max_rounds: int = 8,
+                     limits: HumanLimits | None = None, progress=None) -> VerifiedTrace:
+    """Trace ``figure``, replay its controls through the full dynamics, and add rests if needed.
+
+    Parameters
+    ----------
+    rests : {"auto", "never", "joins"}
+        ``"auto"`` (default) adds a rest in the middle of each failing section and of the
+        sections before it on its curve, and tries again, at most ``max_rounds`` times;
+        ``"never"`` traces the figure as given; ``"joins"`` rests at every smooth join.
+    rel_tol : float
+        Verification tolerance as a fraction of the figure's size (:func:`~skatetrace.verification.verify.verify`).
+    limits : HumanLimits, optional
+        What a skater can do, in the figure's units, for the feasibility verdict. Default:
+        :meth:`HumanLimits.for_model` (model units at the scale of the paper's figure); give
+        :meth:`HumanLimits.for_skater` for a figure in metres.
+    progress : callable, optional
+        Passed to :func:`~skatetrace.tracing.sections.trace_figure`.
+
+    Returns
+    -------
+    VerifiedTrace
+        Never raises for a failed trace or verification: see its ``success`` and ``message``,
+        and its ``feasibility``. The sections' peak metrics (``max_abs_a``, ``peak_abs_adot``, ...)
+        are those of the exported rows where these reach further than the tracer's own grid.
+    """
+    if rests not in REST_POLICIES:
+        raise ValueError(f"rests must be one of {', '.join(REST_POLICIES)}, got {rests!r}")
+    check_rel_tol(rel_tol)  # before the tracing, not after it
+    if not (isinstance(max_rounds, int) and max_rounds >= 0):
+        raise ValueError(f"max_rounds must be a whole number >= 0, got {max_rounds!r}")
+    added: list[tuple[int, int]] = _all_smooth_joins(figure) if rests == "joins" else []
+    current = add_rests(figure, added)
+    cache: dict[tuple, Any] = {}  # sections solved in one round are reused in the next
+    rounds = 0
+    while True:
+        rounds += 1
+        trace = trace_figure(current, params, options, progress=progress, cache=cache)
+        schedule, states = schedule_from_trace(trace)
+        report = verify(trace, schedule, rel_tol=rel_tol)
+        result = VerifiedTrace(figure=current, trace=trace, schedule=schedule, states=states, report=report,
+                               rests=tuple(added), rounds=rounds)
+        if result.success or rests != "auto" or rounds > max_rounds:
+            return _finish(result, limits)
+        # The replay carries each section's end state into the next, so a section may fail for an
+        # error made before it: every section of the curve up to its last failing one is split.
+        last_bad: dict[int, int] = {}
+        for k, (sec, checks) in enumerate(zip(trace.sections, report.sections)):
+            if not (sec.success and checks.get("passed", False)):
+                last_bad[sec.curve_index] = k
+        new = []
+        for k, sec in enumerate(trace.sections):
+            if k <= last_bad.get(sec.curve_index, -1):
+                piece = middle_join(sec.section)
+                if piece is not None:
+                    new.append((sec.curve_index, piece))
+        if not new:
+            return _finish(result, limits)
+        added += new
+        current = add_rests(figure, added)
+
+
+_PEAKS = ("max_abs_a", "max_abs_b", "peak_abs_adot", "peak_abs_bdot", "peak_mass_kinetic_energy")
+
+
+def _finish(result: VerifiedTrace, limits: HumanLimits | None) -> VerifiedTrace:
+    """Refresh the sections' peaks from the exported rows, and add the feasibility verdict.
+
+    The tracer's metrics come from a uniform grid, which can miss a narrow spike of the rates
+    (where the mass passes near the singular point); the exported rows resolve it.
+    """
+    trace = result.trace
+    peaks = exported_peaks(result.schedule, result.states, trace.params, len(trace.sections))
+    sections = tuple(replace(sec, metrics={**sec.metrics, **{k: max(sec.metrics.get(k, 0.0), p[k]) for k in _PEAKS}})
+                     if p else sec for sec, p in zip(trace.sections, peaks))
+    trace = replace(trace, sections=sections)
+    if limits is None:
+        limits = HumanLimits.for_model(params=trace.params)
+    feasibility = assess_feasibility(trace, result.schedule, result.states, limits)
+    return replace(result, trace=trace, feasibility=feasibility)

@@ -1,0 +1,641 @@
+"""Constrained dynamics of the sleigh on a curve, and the manoeuvres that start and stop it.
+
+While the blade follows a curve of curvature ``kappa`` the control rates satisfy the curvature
+condition ``c_a adot + c_b bdot + c_0 = 0`` (``model.curvature_coefficients``). We keep both rates
+as unknowns and split them along the unit vectors of ``c = (c_a, c_b)``::
+
+    (adot, bdot) = u * n - c_0 * c / |c|^2,     n = (-c_b, c_a) / |c|
+
+``u(t)`` is the free control: the speed of the mass along the direction that leaves the curvature
+unchanged. The split is singular only where ``c = 0``, the single point ``(0, -kappa I / M)``
+(PHYSICS.md), unlike the paper's choice of ``bdot`` as the dependent rate (singular at ``a = 0``
+and ``b = (M + m) / (kappa m)``).
+
+A *glide* is the steady state of this system: the mass is locked at ``(0, b)`` on an arc (any
+``(a, b)`` on a line) and the sleigh runs along the curve at constant speed. A *stop* starts in a
+glide and ramps ``u = alpha t`` until the speed vanishes; a *launch* is the same integrated
+backwards in time. Either may run through several smooth joins (a change of curvature with the
+state continuous), so a smooth piece of several arcs and lines is a launch, one glide and a stop.
+On a spiral (curvature varying along the piece) there is no steady glide; the apex is then an
+instant with the mass momentarily at rest relative to the blade, and the legs carry the
+curvature as a cubic of the distance travelled. Each manoeuvre is a small boundary-value problem
+in (alpha, duration): the duration is where the speed first vanishes (an event of the
+integration), so it is one equation in alpha, the stopping length. Its root is bracketed on a
+geometric grid of alpha, found at a moderate accuracy by Brent's method and polished at full
+accuracy by the secant method; should that fail, Brent's method at full accuracy and then Newton's
+method on (alpha, duration) (MINPACK's hybrid method) take over. A launch over the same curve as
+its stop from a glide at ``a = 0`` is the stop reversed in time (:func:`mirrored_maneuver`).
+
+The state integrated here is ``(p1, p2, a, b, s)``, ``s`` the arc length travelled.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.optimize import brentq, root
+
+from ..dynamics.integrator import DenseSolution, final_state, integrate_legs
+from ..dynamics.model import SleighParams, curvature_coefficients, velocities
+
+__all__ = ["Leg", "ManeuverSolution", "glide_state", "constrained_rates", "solve_stop"]
+
+
+@dataclass(frozen=True, slots=True)
+class Leg:
+    """One stretch of the curve inside a manoeuvre: a dense solution on ``[t0, t1]``.
+
+    The curvature on the leg is ``c0 + c1 sigma + c2 sigma^2 + c3 sigma^3`` with ``coefficients =
+    (c0, c1, c2, c3)`` and ``sigma = |s| - s0`` the distance travelled since the leg began (from
+    the glide, backwards for a launch); constant on an arc or a line.
+    """
+
+    coefficients: tuple[float, float, float, float]
+    t0: float
+    t1: float
+    sol: object  # DenseSolution of (p1, p2, a, b, s), callable like scipy's OdeSolution
+    s0: float = 0.0
+
+    def kappa_at(self, s) -> np.ndarray:
+        """Curvature at the manoeuvre's arc-length coordinate ``s`` (signed, as integrated)."""
+        sigma = np.abs(np.asarray(s, dtype=float)) - self.s0
+        c0, c1, c2, c3 = self.coefficients
+        return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ManeuverSolution:
+    """Result of one manoeuvre solve.
+
+    ``params`` are the free-control coefficients, ``duration`` the signed duration (negative for a
+    launch, which is integrated backwards from its glide). ``residuals`` are the boundary
+    conditions at the solution; ``min_singular_distance`` the closest approach of the mass to the
+    singular point.
+    """
+
+    kind: str
+    success: bool
+    message: str
+    params: tuple[float, ...]
+    duration: float
+    legs: tuple[Leg, ...]
+    residuals: dict[str, float] = field(default_factory=dict)
+    min_singular_distance: float = math.inf
+    nfev: int = 0
+    basis: str = "ramp"
+
+    @property
+    def end(self) -> np.ndarray:
+        """State ``(p1, p2, a, b, s)`` at the end of the manoeuvre."""
+        leg = self.legs[-1]
+        return leg.sol(leg.t1)
+
+    def control(self, t):
+        """Free control ``u(t)`` of this manoeuvre."""
+        return _basis(self.basis, self.params, self.duration)(t)
+
+
+def _basis(kind: str, params, duration) -> Callable[[float], float]:
+    if kind == "ramp":
+        (alpha,) = params
+        return lambda t: alpha * t
+    if kind == "sines":
+        a1, a2 = params
+        w = math.pi / duration
+        return lambda t: a1 * np.sin(w * t) + a2 * np.sin(2.0 * w * t)
+    raise ValueError(f"unknown control basis {kind!r}")
+
+
+def glide_state(params: SleighParams, kappa: float, a: float, b: float, speed: float) -> np.ndarray:
+    """Momenta of the steady glide with the mass locked at ``(a, b)``.
+
+    Returns ``(p1, p2)`` such that ``xi2 = speed`` and ``xi1 = kappa * speed`` with
+    ``adot = bdot = 0``. This is steady (``eta = 0``) only if ``kappa == 0`` or ``a == 0``.
+    """
+    M, m, I = params.M, params.m, params.I
+    xi1, xi2 = kappa * speed, speed
+    p1 = (I + m * (a * a + b * b)) * xi1 - m * b * xi2
+    p2 = (M + m) * xi2 - m * b * xi1
+    return np.array([p1, p2])
+
+
+def constrained_rates(params: SleighParams, kappa, p1, p2, a, b, u):
+    """Control rates ``(adot, bdot)`` that hold the curvature, for free control ``u``.
+
+    Vectorised. Returns ``(adot, bdot, |c|)``; ``|c| = 0`` is the singular point.
+    """
+    c_a, c_b, c_0 = curvature_coefficients(params, kappa, p1, p2, a, b)
+    n2 = c_a * c_a + c_b * c_b
+    n = np.sqrt(n2)
+    adot = -u * c_b / n - c_0 * c_a / n2
+    bdot = u * c_a / n - c_0 * c_b / n2
+    return adot, bdot, n
+
+
+def _coefficients(kappa) -> tuple[float, float, float, float]:
+    """A leg's curvature as cubic coefficients: a number (constant) or up to four coefficients."""
+    if np.ndim(kappa) == 0:
+        return (float(kappa), 0.0, 0.0, 0.0)
+    c = [float(v) for v in kappa]
+    return tuple(c + [0.0] * (4 - len(c)))
+
+
+def _kappa_at(legs_spec, s: float) -> float:
+    """Curvature at ``|s|`` on legs ``[(coefficients, s_switch), ...]``."""
+    start = 0.0
+    for coeffs, switch in legs_spec:
+        if abs(s) <= switch:
+            break
+        start = switch
+    c0, c1, c2, c3 = coeffs
+    sigma = abs(s) - start
+    return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+
+
+def _integrate(params, y0, legs_spec, alpha, t_end, *, rtol, atol, stop=False, singular_limit=0.0, dense=True):
+    """Integrate the constrained system under ``u = alpha t`` through legs ``[(coefficients, s_switch), ...]``.
+
+    A leg ends when ``|s|`` reaches its ``s_switch`` (the last leg's is ``inf``) or at ``t_end``.
+    ``stop`` and ``singular_limit`` arm the terminal events of :func:`integrate_legs`. Returns
+    ``(legs, status, t, y, hit)``: the legs entered (``None`` each unless ``dense``), 0 or a
+    negative failure code, the final time and state, and the name of the terminal event hit.
+    """
+    res = integrate_legs(params, y0, np.array([k for k, _ in legs_spec], dtype=float).reshape(-1, 4),
+                         [s for _, s in legs_spec], alpha, t_end,
+                         rtol=rtol, atol=atol, stop_event=stop, singular_limit=singular_limit,
+                         max_nfev=_MAX_EVALUATIONS, dense=dense)
+    bounds = res.leg_bounds
+    legs = [Leg(legs_spec[i][0], float(bounds[i]), float(bounds[i + 1]), res.legs[i] if res.legs else None,
+                float(legs_spec[i - 1][1]) if i else 0.0)
+            for i in range(res.nlegs)]
+    return legs, res.status, res.t, res.y, res.hit
+
+
+_MAX_EVALUATIONS = 150_000 * 4  # per integration: only near a blow-up does the step size collapse like this
+
+
+def _end_speed(params, legs_spec, y, u):
+    p1, p2, a, b, s = y
+    ad, bd, _n = constrained_rates(params, _kappa_at(legs_spec, s), p1, p2, a, b, u)
+    return velocities(params, p1, p2, a, b, ad, bd)[1]
+
+
+# Time reversal t -> -t with (p1, p2, a, b, s) -> (p1, p2, -a, b, -s) and the same ramp slope alpha
+# maps the constrained system onto itself (c_a, c_0 and the speed xi2 are even in a, c_b odd; the
+# rates (adot, bdot) -> (adot, -bdot) then give (p1, p2)' -> -(p1, p2)'), and the curvature depends
+# on |s| only. IEEE arithmetic is symmetric under negation, so this is exact in floating point too.
+_MIRROR = np.array([1.0, 1.0, -1.0, 1.0, -1.0])
+
+
+def _mirrored_dense(sol: DenseSolution) -> DenseSolution:
+    """``sol`` under the time reversal: the interpolant's variable ``(t - t_old) / h`` is unchanged."""
+    return DenseSolution(-sol.t_old, -sol.h, sol.y_old * _MIRROR, sol.F * _MIRROR)
+
+
+def same_legs(first, second) -> bool:
+    """Whether two lists of legs ``[(kappa, length), ...]`` describe the same curve from the glide."""
+    return len(first) == len(second) and all(
+        _coefficients(k1) == _coefficients(k2) and float(l1) == float(l2)
+        for (k1, l1), (k2, l2) in zip(first, second))
+
+
+def mirrored_maneuver(solution: ManeuverSolution, legs=None) -> ManeuverSolution:
+    """The launch (or stop) on the same legs that is the time reversal of a stop (or launch).
+
+    A stop from a glide with the mass at ``(a, b)`` reversed in time is the launch onto the glide at
+    ``(-a, b)`` over the same legs (integrated backwards from it), with the same ``alpha``, the
+    duration negated and the same residuals and singular distance. So when a section's launch runs
+    over the same curve as its stop and the mass glides at ``a = 0`` the launch is the stop's mirror
+    image, exactly, and need not be solved again.
+
+    ``legs`` (``[(kappa, length), ...]``, :func:`same_legs` as the solution's) gives the curvature
+    coefficients to report on the mirror's legs as its own solve would (a launch's come from a
+    polynomial expanded backwards: ``-0.0`` where the stop has ``0.0``).
+    """
+    kind = "launch" if solution.kind == "stop" else "stop"
+    coeffs = [_coefficients(k) for k, _ in legs] if legs is not None else [leg.coefficients for leg in solution.legs]
+    legs = tuple(Leg(c, -leg.t0, -leg.t1, _mirrored_dense(leg.sol), leg.s0) for c, leg in zip(coeffs, solution.legs))
+    return ManeuverSolution(
+        kind=kind, success=solution.success, message=solution.message, params=solution.params,
+        duration=-solution.duration, legs=legs, residuals=dict(solution.residuals),
+        min_singular_distance=solution.min_singular_distance, nfev=0, basis=solution.basis,
+    )
+
+
+def _singular_distances(params, legs, n=400):
+    """Closest approach of the mass to the singular point on ``n`` samples per leg, and its distance at the start.
+
+    The start (the glide, the first sample) is shared by every candidate solution of a manoeuvre,
+    so no candidate can come out farther than that.
+    """
+    best = start = math.inf
+    for i, leg in enumerate(legs):
+        ts = np.linspace(leg.t0, leg.t1, n)
+        y = leg.sol(ts)
+        sb = -leg.kappa_at(y[4]) * params.I / params.M
+        d = np.hypot(y[2], y[3] - sb)
+        best = min(best, float(np.min(d)))
+        if i == 0:
+            start = float(d[0])
+    return best, start
+
+
+# The bracketing scan: multiples of the natural ramp slope ``speed^3 / length^2``. alpha scales
+# like 1/length^2 on an arc and 1/length on a line: a wide grid covers both.
+_GRID = np.geomspace(1e-3, 2e3, 29)
+# On a single leg the scan looks at every _COARSE-th grid point first (see _first_bracket); on
+# several legs at every point, since a stop that reaches a join where the curvature jumps makes the
+# stopping length jump too (plateaus at the join and spikes one grid point wide are seen).
+_COARSE = 4
+# Accuracy of the integrations at the grid points (they only tell on which side of the length the
+# stop falls, and whether there is one) and of Brent's method on the bracket found.
+_GRID_RTOL, _GRID_ATOL = 1e-6, 1e-8
+_SCAN_RTOL, _SCAN_ATOL = 1e-9, 1e-11
+# That root is found to this relative precision in alpha, then polished at full accuracy by the
+# secant method (at most _SECANT_STEPS further integrations). Brent's method at full accuracy to
+# adjacent floating-point numbers took some fifteen integrations; this takes two or three.
+_SCAN_XTOL = 1e-9
+_SECANT_STEPS = 8
+
+
+class _NoStop(Exception):
+    """An integration that did not end with the speed vanishing (no stop, singular, failure)."""
+
+
+class _Stopper:
+    """Event-located stops of one manoeuvre: ``run(alpha)`` integrates until the speed vanishes.
+
+    Counts the integrations in ``nfev``.
+    """
+
+    def __init__(self, params, y0, legs_spec, t_max, singular_limit):
+        self.params, self.y0 = params, y0
+        # the legs as the compiled integrator takes them, made once for all the runs
+        self.coef = np.array([k for k, _ in legs_spec], dtype=float).reshape(-1, 4)
+        self.switches = np.array([s for _, s in legs_spec], dtype=float)
+        self.t_max, self.singular_limit = t_max, singular_limit
+        self.nfev = 0
+
+    def run(self, alpha, rtol, atol):
+        """``(tau, y)`` at the first stop under ``u = alpha t``; raises :class:`_NoStop` otherwise."""
+        self.nfev += 1
+        hit, tf, yf = final_state(self.params, self.y0, self.coef, self.switches, alpha, self.t_max, rtol=rtol,
+                                  atol=atol, stop_event=True, singular_limit=self.singular_limit,
+                                  max_nfev=_MAX_EVALUATIONS)
+        if hit != "stopped":
+            raise _NoStop
+        return tf, yf
+
+
+def _first_bracket(length_at, start, stop, length, coarse):
+    """Grid indices ``(i, j)`` of the first bracket of ``length`` among points ``start..stop - 1``.
+
+    ``length_at(i)`` is ``(stopping length, time)`` at grid point ``i``, or ``None`` where the ramp
+    does not stop the sleigh. Brackets are looked for in ``|alpha|`` order between points ``coarse``
+    apart (the fine grid's points in between are not integrated). Where the stop comes or goes
+    between two such points the fine points there are all looked at, so that a root next to the
+    edge of the stopping range is found as by the full scan; where both points stop on the same
+    side of ``length``, or neither stops, there is taken to be no root in between. On a single leg
+    the stopping length changes slowly and monotonically along the grid wherever the ramp stops the
+    sleigh (a pair of roots, or an island of stops, within a factor ``1.68^coarse`` in alpha has not
+    been seen); across joins it does not, and there ``coarse`` is 1: every point, as the full scan.
+    """
+    i = start
+    while i < stop - 1:
+        j = min(i + coarse, stop - 1)
+        li, lj = length_at(i), length_at(j)
+        if li is not None and lj is not None:
+            if (li[0] - length) * (lj[0] - length) <= 0.0:
+                return i, j
+        elif (li is None) != (lj is None) and j - i > 1:
+            fine = _first_bracket(length_at, i, j + 1, length, 1)
+            if fine is not None:
+                return fine
+        i = j
+    return None
+
+
+def _interpolated_guess(grid, i, j, li, lj, length):
+    """``(alpha, tau)`` interpolated on a bracket, log-linearly in the stopping length."""
+    (l1, t1), (l2, t2), a1, a2 = li, lj, grid[i], grid[j]
+    w = (math.log(l1) - math.log(length)) / (math.log(l1) - math.log(l2)) if l1 != l2 else 0.5
+    return a1 * (a2 / a1) ** w, t1 + w * (t2 - t1)
+
+
+def _scan_root(stopper, grid, i, j, length_at, length):
+    """Brent's method at the scan's accuracy for the root on ``grid[i..j]``, in ``log |alpha|``.
+
+    Returns ``(alpha, tau, slope)``: the root, the stopping time there and the slope of the
+    stopping length in alpha (a secant over the nearest point tried at least ``1e-6`` away, where
+    the scan's inaccuracy hardly shows; None if there is none). Raises :class:`_NoStop`.
+    """
+    direction = math.copysign(1.0, grid[i])
+    seen = {math.log(abs(grid[k])): length_at(k) for k in (i, j)}
+
+    def excess(x):
+        if x not in seen:
+            tau, yf = stopper.run(direction * math.exp(x), _SCAN_RTOL, _SCAN_ATOL)
+            seen[x] = (abs(yf[4]), tau)
+        return math.log(max(seen[x][0], 1e-300) / length)
+
+    xi, xj = math.log(abs(grid[i])), math.log(abs(grid[j]))
+    x = brentq(excess, xi, xj, xtol=_SCAN_XTOL, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+    excess(x)
+    far = [u for u in seen if abs(u - x) >= 1e-6]
+    slope = None
+    if far:
+        u = min(far, key=lambda v: abs(v - x))
+        slope = (seen[u][0] - seen[x][0]) / (direction * (math.exp(u) - math.exp(x)))
+    return direction * math.exp(x), seen[x][1], slope
+
+
+def _scan(stopper, grid, length, coarse):
+    """The first bracket of the stopping length along ``grid`` (one sign of alpha), or None.
+
+    Returns ``(a1, a2, root, guess)``: neighbouring grid points ``a1, a2`` between which the
+    stopping length crosses ``length``; the root ``(alpha, tau)`` there at the scan's accuracy, or
+    None where a ramp inside the bracket does not stop; and ``guess()``, the root interpolated on
+    the bracket (the start of Newton's method, should all else fail). ``coarse`` is the stride of
+    the first look along the grid (see :func:`_first_bracket`).
+    """
+    cache = {}
+
+    def length_at(k):
+        if k not in cache:
+            try:
+                tau, yf = stopper.run(grid[k], _GRID_RTOL, _GRID_ATOL)
+                cache[k] = (abs(yf[4]), tau)
+            except _NoStop:
+                cache[k] = None
+        return cache[k]
+
+    def root_on(i, j):
+        try:
+            return _scan_root(stopper, grid, i, j, length_at, length)
+        except (_NoStop, RuntimeError, ValueError):
+            return None
+
+    start = 0
+    while (bracket := _first_bracket(length_at, start, grid.size, length, coarse)) is not None:
+        i, j = bracket
+        root = root_on(i, j)
+        if root is None and j - i > 1:
+            # a ramp inside the coarse bracket does not stop: every grid point in it is looked at
+            fine = _first_bracket(length_at, i, j + 1, length, 1)
+            if fine is None:
+                start = j
+                continue
+            i, j = fine
+            root = root_on(i, j)
+        if root is not None and j - i > 1:
+            # the grid points next to the root (for Brent's method at full accuracy, should the
+            # polish fail)
+            k = i + int(np.searchsorted(np.abs(grid[i:j + 1]), abs(root[0]), side="right")) - 1
+            i = min(max(k, i), j - 1)
+            j = i + 1
+        return grid[i], grid[j], root, lambda i=i, j=j, root=root: _guess(grid, i, j, length_at, length, root)
+    return None
+
+
+def _guess(grid, i, j, length_at, length, root):
+    """``(alpha, tau)`` interpolated on the bracket ``grid[i..j]`` or, where an end does not stop, ``root``'s."""
+    li, lj = length_at(i), length_at(j)
+    if li is None or lj is None:
+        return root[:2]
+    return _interpolated_guess(grid, i, j, li, lj, length)
+
+
+def _secant_stop(stopper, alpha0, slope, a1, a2, length, rtol, atol):
+    """The secant method at full accuracy on the event-located stopping length, from ``alpha0``.
+
+    ``alpha0`` is the root at the scan's accuracy (about ``_SCAN_XTOL`` off) and ``slope`` the
+    stopping length's slope there (or None). The first step is Newton's with that slope, which
+    lands some thousand times closer; the secant step from there is within rounding of the root.
+    Stops when the stop falls within a few ulps of ``length``, the step is down to a few ulps of
+    alpha or the iterate leaves ``[a1, a2]``. Returns ``(alpha, tau, y)`` of the iterate with the
+    least excess length, or raises :class:`_NoStop`.
+    """
+    lo, hi = min(a1, a2), max(a1, a2)
+    tried = []
+
+    def excess(alpha):
+        tau, yf = stopper.run(alpha, rtol, atol)
+        f = abs(yf[4]) - length
+        tried.append((abs(f), alpha, tau, yf))
+        return f
+
+    ftol = 4.0 * np.finfo(float).eps * length  # a few ulps: the rounding of the stop's arc length
+    x_prev, f_prev = alpha0, excess(alpha0)
+    x = alpha0 - f_prev / slope if slope else math.nan
+    if not (lo <= x <= hi and x != alpha0):
+        x = alpha0 * (1.0 + 100.0 * _SCAN_XTOL)
+    for _ in range(_SECANT_STEPS if abs(f_prev) > ftol else 0):
+        f = excess(x)
+        if abs(f) <= ftol or f == f_prev:
+            break
+        x_next = x - f * (x - x_prev) / (f - f_prev)
+        if not lo <= x_next <= hi or abs(x_next - x) <= 4.0 * np.finfo(float).eps * abs(x):
+            break
+        x_prev, f_prev, x = x, f, x_next
+    _f, alpha, tau, yf = min(tried, key=lambda r: r[0])
+    return float(alpha), float(tau), yf
+
+
+def _refined_stop(params, stopper, legs_spec, speed, length, root, a1, a2, rtol, atol):
+    """:func:`_secant_stop` with the acceptance test of :func:`_bracket_stop`.
+
+    Returns ``((alpha, tau), residuals)`` or ``(None, None)``.
+    """
+    try:
+        alpha, tau, yf = _secant_stop(stopper, root[0], root[2], a1, a2, length, rtol, atol)
+    except _NoStop:
+        return None, None
+    res = {"end_speed": float(_end_speed(params, legs_spec, yf, alpha * tau)),
+           "length": float(abs(yf[4]) - length)}
+    if not (abs(res["end_speed"]) < 1e-11 * speed and abs(res["length"]) < 1e-11 * length):
+        return None, None
+    return (alpha, tau), res
+
+
+def solve_stop(
+    params: SleighParams,
+    legs: list[tuple[float, float]],
+    glide_ab: tuple[float, float],
+    speed: float,
+    *,
+    backward: bool = False,
+    rtol: float = 1e-13,
+    atol: float = 1e-14,
+    singular_limit: float = 1e-3,
+) -> ManeuverSolution:
+    """Bring a glide to rest (or, with ``backward=True``, start it from rest).
+
+    The free control is a ramp ``u = alpha t`` from the glide (``t = 0``). Unknowns ``alpha`` and
+    the duration ``tau``; residuals ``xi2(tau) / speed`` and ``(s(tau) - length) / length``.
+    A launch is integrated backwards in time from the glide, so its ``tau`` is negative.
+
+    For each sign of ``alpha`` the first ramp (in ``|alpha|`` order on a geometric grid) whose
+    event-located stop falls at ``length`` is found at a moderate accuracy, then polished at full
+    accuracy; of the two signs the solution whose mass stays farther from the singular point
+    wins (the positive sign on a tie).
+
+    Parameters
+    ----------
+    legs : list of (kappa, length)
+        The curve from the glide onwards (backwards for a launch): curvature (1/length) and arc
+        length of each stretch, joined smoothly. ``kappa`` is a number (an arc or a line) or up to
+        four coefficients of a cubic in the distance travelled on the leg (a spiral; for a launch
+        that distance runs backwards along the curve). The curvature where the first leg begins is
+        the glide's (or the instant apex's).
+    glide_ab : (float, float)
+        Locked mass position during the glide.
+    speed : float
+        Glide speed (> 0).
+    """
+    length = float(sum(ell for _, ell in legs))
+    legs_spec = []
+    acc = 0.0
+    for i, (k, ell) in enumerate(legs):
+        acc += ell
+        legs_spec.append((_coefficients(k), acc if i + 1 < len(legs) else math.inf))
+    kappa = legs_spec[0][0][0]
+    kind = "launch" if backward else "stop"
+    a0, b0 = glide_ab
+    sa, sb = 0.0, -kappa * params.I / params.M
+    if math.hypot(a0 - sa, b0 - sb) <= singular_limit * params.length_scale:
+        return ManeuverSolution(
+            kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=0,
+            message=(f"the glide's mass position ({a0:.6g}, {b0:.6g}) is at the singular point "
+                     f"(0, -kappa I / M) = ({sa:.6g}, {sb:.6g}) of curvature {kappa:.6g}"),
+        )
+    p = glide_state(params, kappa, a0, b0, speed)
+    y0 = np.array([p[0], p[1], a0, b0, 0.0])
+    sign = -1.0 if backward else 1.0
+    scale = params.length_scale
+    # Natural time and control scales: time ~ length / speed, u ~ speed^2 / length.
+    t_nat = length / speed
+    u_nat = speed * speed / length
+    stopper = _Stopper(params, y0, legs_spec, sign * 60.0 * t_nat, singular_limit * scale)
+    nfev = 0
+    found = False
+    best = None
+    # One bracket per sign of alpha; prefer the sign that keeps the mass farther from the singular point.
+    for direction in (1.0, -1.0):
+        cand = _scan(stopper, direction * u_nat / t_nat * _GRID, length, _COARSE if len(legs_spec) == 1 else 1)
+        if cand is None:
+            continue
+        found = True
+        a1, a2, root, guess = cand
+        sol = (None, None)
+        if root is not None:
+            sol = _refined_stop(params, stopper, legs_spec, speed, length, root, a1, a2, rtol, atol)
+        if sol[0] is None:
+            # Brent's method at full accuracy on the bracket (cannot diverge), then Newton's method
+            # on (alpha, tau) from the guess. The scan's accuracy can mislead where the stop is
+            # ill-conditioned (the speed creeping to zero): its root was seen 0.2% off the true one.
+            sol = _bracket_stop(params, legs_spec, y0, sign * 60.0 * t_nat, speed, length, a1, a2, rtol, atol,
+                                singular_limit * scale)
+            nfev += sol[2]
+        if sol[0] is None:
+            alpha0, tau0 = guess()
+            sol = _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol)
+            nfev += sol[2]
+        if sol[0] is None:
+            continue
+        (alpha, tau), res = sol[0], sol[1]
+        nfev += 1
+        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol)
+        if status != 0 or len(legs) < len(legs_spec):
+            continue  # the dense re-run did not get through: no usable solution from this bracket
+        dist, start = _singular_distances(params, legs)
+        if best is None or dist > best[3]:
+            best = (alpha, tau, legs, dist, res)
+        if best[3] >= start:
+            break  # the mass is nowhere nearer than at the glide: the other sign could only tie
+    nfev += stopper.nfev
+    if not found:
+        return ManeuverSolution(
+            kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=nfev,
+            message=(f"no {kind} of length {length:.6g} found from a glide on curvature {kappa:.6g}: every ramp "
+                     "either never stops the sleigh or drives the mass into the singular point"),
+        )
+    if best is None:
+        return ManeuverSolution(
+            kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=nfev,
+            message=(f"neither the bracketed root nor Newton's method converged for the {kind} of length "
+                     f"{length:.6g}"),
+        )
+    alpha, tau, legs, dist, res = best
+    ok = dist > singular_limit * scale
+    return ManeuverSolution(
+        kind=kind, success=ok, params=(alpha,), duration=tau, legs=tuple(legs),
+        residuals=res, min_singular_distance=dist, nfev=nfev,
+        message="converged" if ok else f"mass came within {dist:.3g} of the singular point",
+    )
+
+
+def _bracket_stop(params, legs_spec, y0, t_max, speed, length, a1, a2, rtol, atol, singular_limit):
+    """Brent's method for ``alpha`` in ``[a1, a2]``: the first stop of the speed falls at ``length``.
+
+    Returns ``((alpha, tau), residuals, nfev)`` or ``(None, None, nfev)`` if the bracket does not
+    hold at full accuracy or the stopping length jumps across it (the speed touching zero
+    earlier), so that the root leaves a residual.
+    """
+    count = 0
+
+    class _NoStop(Exception):
+        pass
+
+    def run(alpha):
+        nonlocal count
+        count += 1
+        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, t_max, rtol=rtol, atol=atol, stop=True,
+                                               singular_limit=singular_limit, dense=False)
+        if status != 0 or hit != "stopped":
+            raise _NoStop
+        return tf, yf
+
+    def excess(alpha):
+        return abs(run(alpha)[1][4]) - length
+
+    try:
+        f1, f2 = excess(a1), excess(a2)
+        if not f1 * f2 <= 0.0:
+            return None, None, count
+        alpha = brentq(excess, a1, a2, xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+        tau, yf = run(alpha)
+    except (_NoStop, RuntimeError):
+        return None, None, count
+    res = {"end_speed": float(_end_speed(params, legs_spec, yf, alpha * tau)),
+           "length": float(abs(yf[4]) - length)}
+    if not (abs(res["end_speed"]) < 1e-11 * speed and abs(res["length"]) < 1e-11 * length):
+        return None, None, count
+    return (alpha, tau), res, count
+
+
+def _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol):
+    count = 0
+
+    def residual(z):
+        nonlocal count
+        count += 1
+        alpha, tau = z[0] * alpha0, z[1] * tau0
+        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol, dense=False)
+        if status != 0 or len(legs) < len(legs_spec) or not np.all(np.isfinite(yf)):
+            return np.array([1e3, 1e3])
+        v = _end_speed(params, legs_spec, yf, alpha * tau)
+        return np.array([v / speed, (abs(yf[4]) - length) / length])
+
+    out = root(residual, [1.0, 1.0], method="hybr", options={"xtol": 1e-14})
+    if not out.x[1] > 0.0:
+        # A duration of the other sign runs the manoeuvre the wrong way in time (a stop before its
+        # glide, a launch after it): the residuals may vanish there, but it is no manoeuvre.
+        return None, None, count
+    res = residual(out.x)
+    if not np.all(np.abs(res) < 1e-11):
+        return None, None, count
+    return (out.x[0] * alpha0, out.x[1] * tau0), {"end_speed": float(res[0] * speed),
+                                                   "length": float(res[1] * length)}, count

@@ -1,0 +1,673 @@
+"""Exact tracing of figures: controls under which the full dynamics follows every piece.
+
+Each section of a figure (pieces joined smoothly, from one cusp to the next) is traced from rest
+to rest as *launch, glide, stop* (see :mod:`skatetrace.tracing.maneuver`):
+
+1. a glide on the section's longest segment, the mass locked at ``(0, b_g)`` on an arc or
+   ``(a_g, 0)`` on a line, at the requested speed;
+2. a stop, integrated forwards from the glide through the rest of the section, whose ramp control
+   and duration are found by Newton's method so that the speed vanishes exactly at the section's end;
+3. a launch, the same integrated backwards from the glide to the section's start.
+
+On a spiral (a piece whose curvature is a cubic of arc length, from exact mode) the mass cannot
+be locked: there the apex is an instant at the piece's middle, and the launch runs straight into
+the stop. The legs then carry the curvature polynomial, evaluated at the arc length reached.
+
+The curvature condition holds by construction at every instant, so the blade follows the section
+exactly; the length and the zero end speeds are the boundary conditions of the Newton solves.
+A section traversed backwards (after a reversal) is solved forwards and mapped by the symmetry
+``(a, b, p2, xi2) -> -(a, b, p2, xi2)`` of the model (the sleigh's mass centre sits on the blade).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from enum import Enum
+from typing import Any
+
+import numpy as np
+
+from ..figures.figure import Figure, Section
+from ..figures.geometry import shifted_polynomial, travel
+from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
+from ..dynamics.model import SleighParams, mass_energy, velocities
+
+__all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
+
+
+class TraceStatus(Enum):
+    """Outcome of tracing a section; the value is the message."""
+
+    SUCCESS = "traced exactly"
+    NO_STOP = "no stop manoeuvre could end the section at rest"
+    NO_LAUNCH = "no launch manoeuvre could start the section from rest"
+    SINGULAR = "the mass approached the singular set of the control law"
+    RESIDUAL = "boundary conditions not met to the required tolerance"
+    EXCURSION = "the mass would have to move implausibly far or the blade stall inside the section"
+
+
+#: Accepted glide speeds (model length per time unit, or m/s).
+SPEED_RANGE = (1e-6, 1e6)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class TraceOptions:
+    """Options of the exact tracer.
+
+    Parameters
+    ----------
+    speed : float
+        Glide speed along the blade (model length per time unit). Time scaling is a symmetry of
+        the model, so this changes durations and rates, never the path of the mass.
+    maneuver_length : float or None
+        Arc length given to the launch and to the stop inside the glide segment. ``None`` chooses
+        ``min(L/2, radius)`` on an arc and ``min(L/2, sqrt(I/(M+m)))`` on a line.
+    glide_lateral : float or None
+        Lateral position ``b`` of the mass while gliding on an arc. ``None`` (default) tries
+        ``b = 0`` first, then positions on the side of the neighbouring curvature's singular point
+        from which the jump of the control rates at a smooth join speeds the sleigh up rather than
+        braking it (see :func:`trace_section`).
+    residual_tol : float
+        Largest accepted boundary-condition residual.
+    singular_limit : float
+        Closest allowed approach to the singular point, in units of ``sqrt(I/(M+m))``.
+    excursion_limit : float
+        Largest accepted distance of the mass from the contact point, in units of
+        ``max(sqrt(I/(M+m)), section length)``. Beyond it a solution is numerically meaningless.
+    rtol, atol : float
+        Integration tolerances of the manoeuvres.
+    placement : {"least-reach", "first"}
+        Which of the glide placements that trace the section to keep: the one whose mass stays
+        closest to the blade (default) or the first that works.
+    search : int
+        With ``"least-reach"``: how many more placements to try after the first that works (in
+        the order of :func:`trace_section`). Sections of a few pieces have fewer placements than
+        this and are searched completely; a fitted drawing's long section is not.
+    """
+
+    speed: float = 1.0
+    maneuver_length: float | None = None
+    glide_lateral: float | None = None
+    residual_tol: float = 1e-10
+    singular_limit: float = 1e-3
+    excursion_limit: float = 20.0
+    rtol: float = 1e-13
+    atol: float = 1e-14
+    placement: str = "least-reach"
+    search: int = 16
+
+    def __post_init__(self) -> None:
+        for name in ("speed", "maneuver_length", "glide_lateral", "residual_tol", "singular_limit", "excursion_limit",
+                     "rtol", "atol"):
+            value = getattr(self, name)
+            if value is None and name in ("maneuver_length", "glide_lateral"):
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ValueError(f"{name} must be a number, got {value!r}")
+            if not (abs(value) <= 1e300 and math.isfinite(value)):  # a huge int would overflow isfinite
+                raise ValueError(f"{name} must be finite, got {value!r}")
+        # Durations scale as 1 / speed; far outside this range they under- or overflow the
+        # absolute time steps of the integrators (at 1e100 a replay divides by zero).
+        if not (SPEED_RANGE[0] <= self.speed <= SPEED_RANGE[1]):
+            raise ValueError(f"speed must lie between {SPEED_RANGE[0]:g} and {SPEED_RANGE[1]:g} (positive), "
+                             f"got {self.speed!r}")
+        if self.maneuver_length is not None and not (math.isfinite(self.maneuver_length) and self.maneuver_length > 0):
+            raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
+        if not (isinstance(self.search, int) and self.search >= 0):
+            raise ValueError(f"search must be a whole number >= 0, got {self.search!r}")
+        if self.placement not in ("least-reach", "first"):
+            raise ValueError(f"placement must be 'least-reach' or 'first', got {self.placement!r}")
+        for name in ("residual_tol", "singular_limit", "excursion_limit", "rtol", "atol"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class _Phase:
+    kind: str  # "launch", "glide", "stop"
+    t0: float  # section time (normalised, glide speed 1)
+    t1: float
+    maneuver: ManeuverSolution | None
+    s0: float  # section arc length at the phase's start
+    kappa: float = 0.0  # glide curvature
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SectionTrace:
+    """Controls that trace one section exactly, with the solver's report.
+
+    Times are local to the section and physical (scaled by ``speed``). Use :meth:`evaluate`
+    for the state and controls at any time and :meth:`breakpoints` for the instants where the
+    control rates may jump.
+    """
+
+    success: bool
+    status: TraceStatus
+    message: str
+    curve_index: int
+    section: Section
+    params: SleighParams
+    speed: float
+    glide: dict[str, Any]
+    phases: tuple[_Phase, ...] = ()
+    residuals: dict[str, float] = field(default_factory=dict)
+    metrics: dict[str, float] = field(default_factory=dict)
+    nfev: int = 0
+
+    @property
+    def direction(self) -> int:
+        return self.section.pieces[0].direction
+
+    @property
+    def duration(self) -> float:
+        return self.phases[-1].t1 / self.speed if self.phases else math.nan
+
+    @property
+    def length(self) -> float:
+        return self.section.length
+
+    def breakpoints(self) -> np.ndarray:
+        """Physical times of phase and segment boundaries (control rates may jump there)."""
+        out = [0.0]
+        for ph in self.phases:
+            if ph.maneuver is not None:
+                for leg in ph.maneuver.legs:
+                    for t in (leg.t0, leg.t1):
+                        out.append(self._section_time(ph, t))
+            out.append(ph.t1)
+        return np.unique(np.asarray(out)) / self.speed
+
+    def _section_time(self, ph: _Phase, t_local: float) -> float:
+        if ph.kind == "launch":
+            return t_local - ph.maneuver.duration  # duration < 0: t in [tau, 0] -> [0, -tau]
+        return ph.t0 + t_local
+
+    def evaluate(self, t, side: str = "right", geometry: bool = True) -> dict[str, np.ndarray]:
+        """State and controls at physical section times ``t`` (1-D array).
+
+        Returns a dict of arrays: ``p1, p2, theta, x, y, a, b, adot, bdot, s, xi1, xi2`` and
+        ``segment`` (index of the piece within the section). At a breakpoint, where the control
+        rates jump, ``side="right"`` gives the limit from after it (the phase or leg that starts
+        there) and ``side="left"`` the limit from before it. ``geometry=False`` leaves out
+        ``theta, x, y`` (laying spirals out is the costly part, and sampling needs only controls).
+        """
+        if side not in ("left", "right"):
+            raise ValueError(f"side must be 'left' or 'right', got {side!r}")
+        if not self.phases:
+            raise ValueError(f"this section was not traced ({self.message}); there is nothing to evaluate")
+        right = side == "right"
+        V = self.speed
+        tn = np.atleast_1d(np.asarray(t, dtype=float)) * V
+        end = self.phases[-1].t1
+        if not np.all((tn >= 0.0) & (tn <= end * (1 + 1e-14))):
+            raise ValueError(f"times must lie in the section's span [0, {self.duration:.6g}]")
+        n = tn.size
+        out = {k: np.empty(n) for k in ("p1", "p2", "a", "b", "adot", "bdot", "s")}
+        # Which piece each time belongs to follows from the phase and leg, not from s: at a join
+        # s is only known to the integration's accuracy.
+        g = self.glide["segment"]
+        seg = np.empty(n, dtype=int)
+        for i, ph in enumerate(self.phases):
+            first, last = i == 0, i == len(self.phases) - 1
+            if right:
+                sel = (tn >= ph.t0) & ((tn < ph.t1) | (last & (tn <= end * (1 + 1e-14))))
+            else:
+                sel = ((tn > ph.t0) | (first & (tn >= 0.0))) & (tn <= ph.t1)
+            if not np.any(sel):
+                continue
+            if ph.kind == "glide":
+                a, b = self.glide["a"], self.glide["b"]
+                p = glide_state(self.params, ph.kappa, a, b, 1.0)
+                out["p1"][sel], out["p2"][sel] = p[0], p[1]
+                out["a"][sel], out["b"][sel] = a, b
+                out["adot"][sel] = out["bdot"][sel] = 0.0
+                out["s"][sel] = ph.s0 + (tn[sel] - ph.t0)
+                seg[sel] = g
+                continue
+            man = ph.maneuver
+            tl = tn[sel] + man.duration if ph.kind == "launch" else tn[sel] - ph.t0
+            tl = np.clip(tl, min(0.0, man.duration), max(0.0, man.duration))
+            vals = {k: np.empty(tl.size) for k in out}
+            vseg = np.empty(tl.size, dtype=int)
+            step = -1 if ph.kind == "launch" else 1
+            # The legs in section-time order (reversed for a launch) cover [lo, hi] in local time
+            # one after the other. At a shared boundary the leg on the requested side wins: on the
+            # right the last leg starting at or before t, on the left the first ending at or after t.
+            order = range(len(man.legs)) if ph.kind != "launch" else range(len(man.legs) - 1, -1, -1)
+            legs = [man.legs[j] for j in order]
+            segidx = [g + step * j for j in order]
+            los = np.array([min(leg.t0, leg.t1) for leg in legs])
+            his = np.array([max(leg.t0, leg.t1) for leg in legs])
+            eps = 1e-12 * max(1.0, abs(man.duration))  # section time -> local time loses a few ulps
+            if right:
+                which = np.searchsorted(los, tl + eps, side="right") - 1
+            else:
+                which = np.searchsorted(his, tl - eps, side="left")
+            which = np.clip(which, 0, len(legs) - 1)
+            for j in np.unique(which):
+                leg, m = legs[j], which == j
+                tj = np.clip(tl[m], los[j], his[j])
+                y = leg.sol(tj)
+                ad, bd, _ = constrained_rates(self.params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3],
+                                              man.control(tj))
+                for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
+                    vals[key][m] = val
+                vseg[m] = segidx[j]
+            vals["s"] = ph.s0 + (vals["s"] - (man.end[4] if ph.kind == "launch" else 0.0))
+            for k in out:
+                out[k][sel] = vals[k]
+            seg[sel] = vseg
+        # physical scaling: momenta and rates scale with the speed
+        for k in ("p1", "p2", "adot", "bdot"):
+            out[k] *= V
+        return self._finish(out, seg, geometry)
+
+    def layout(self, s, segment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The blade's ``(x, y, theta)`` at arc lengths ``s`` along the section on pieces ``segment``.
+
+        ``s`` and ``segment`` are as :meth:`evaluate` returns them; the piece is given, not
+        found from ``s``, since at a join ``s`` is known only to the integration's accuracy.
+        """
+        seg = np.asarray(segment)
+        pieces = self.section.pieces
+        ends = np.cumsum([p.segment.length for p in pieces])
+        s = np.clip(np.asarray(s, dtype=float), 0.0, ends[-1])
+        x, y, heading = np.empty_like(s), np.empty_like(s), np.empty_like(s)
+        starts = np.concatenate([[0.0], ends[:-1]])
+        for i, p in enumerate(pieces):
+            m = seg == i
+            if np.any(m):
+                local = np.clip(s[m] - starts[i], 0.0, p.segment.length)
+                xs, ys, hs = travel(p.start, p.segment, local)
+                x[m], y[m], heading[m] = xs, ys, hs
+        return x, y, heading + (math.pi if self.direction < 0 else 0.0)
+
+    def _finish(self, out: dict[str, np.ndarray], seg: np.ndarray, geometry: bool = True) -> dict[str, np.ndarray]:
+        d = self.direction
+        if geometry:
+            out["x"], out["y"], out["theta"] = self.layout(out["s"], seg)
+        if d < 0:
+            for k in ("a", "b", "adot", "bdot", "p2"):
+                out[k] = -out[k]
+        out["segment"] = seg
+        xi1, xi2, _ = velocities(self.params, out["p1"], out["p2"], out["a"], out["b"], out["adot"], out["bdot"])
+        out["xi1"], out["xi2"] = xi1, xi2
+        return out
+
+    def time_at_length(self, s):
+        """Physical section time at which the blade has travelled ``s`` (scalar or 1-D array).
+
+        A length reached at a breakpoint (a join, within 1e-12 of the section's length) gives that
+        breakpoint. Others are found by bisection (the speed is positive inside a section), all
+        at once, and a time within 1e-9 of a breakpoint is snapped onto it, so that evaluating
+        there gives the state at the start of the next piece.
+        """
+        target = np.asarray(s, dtype=float)
+        flat = np.atleast_1d(target).ravel()
+        bps = self.breakpoints()
+        # Lengths reached at a breakpoint (every join is one) need no search: the blade passes
+        # them there, to the integration's accuracy.
+        s_bp = self.evaluate(bps, geometry=False)["s"]
+        k = np.argmin(np.abs(s_bp[:, None] - flat[None, :]), axis=0)
+        out = np.where(np.abs(s_bp[k] - flat) <= 1e-12 * max(1.0, self.length), bps[k], np.nan)
+        todo = np.flatnonzero(np.isnan(out))
+        if todo.size:
+            lo, hi = np.zeros(todo.size), np.full(todo.size, self.duration)
+            for _ in range(100):
+                mid = 0.5 * (lo + hi)
+                below = self.evaluate(mid, geometry=False)["s"] < flat[todo]
+                lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+            near = bps[np.argmin(np.abs(bps[:, None] - hi[None, :]), axis=0)]
+            out[todo] = np.where(np.abs(near - hi) <= 1e-9 * max(1.0, self.duration), near, hi)
+        return float(out[0]) if target.ndim == 0 else out.reshape(target.shape)
+
+    def to_dict(self) -> dict[str, Any]:
+        phases = []
+        for ph in self.phases:
+            d: dict[str, Any] = {"kind": ph.kind, "t0": ph.t0 / self.speed, "t1": ph.t1 / self.speed}
+            if ph.maneuver is not None:
+                man = ph.maneuver
+                d.update(control="u = alpha * t (t from the glide, backwards for a launch)",
+                         alpha=man.params[0] * self.speed**2,
+                         duration=abs(man.duration) / self.speed,
+                         legs=[{"curvature": list(leg.coefficients)} for leg in man.legs],
+                         residuals=man.residuals, min_singular_distance=man.min_singular_distance)
+            else:
+                d.update(control="mass locked", kappa=ph.kappa)
+            phases.append(d)
+        return {
+            "success": self.success, "status": self.status.name, "message": self.message,
+            "curve": self.curve_index, "pieces": [p.index for p in self.section.pieces],
+            "direction": self.direction, "speed": self.speed, "glide": self.glide,
+            "phases": phases, "residuals": self.residuals, "metrics": self.metrics,
+        }
+
+
+def _auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> float:
+    cap = 1.0 / abs(kappa) if kappa != 0.0 else params.length_scale
+    return min(0.5 * length, cap)
+
+
+def _line_apex(params: SleighParams, ell: float) -> float:
+    """Fore-aft mass position ``a`` for an apex on the blade's axis before a launch over ``ell``.
+
+    Such a launch moves the mass back by about ``(M + m) ell / m``, which must not reach ``a = 0``
+    (the singular point of a line), so the apex sits twice that far ahead plus one model length.
+    """
+    return 2.0 * (params.M + params.m) / params.m * ell + params.length_scale
+
+
+def _glide_candidates(params: SleighParams, segs, g: int, ell: float,
+                      options: TraceOptions) -> list[tuple[tuple[float, float], bool]]:
+    """Mass positions ``((a, b), steady)`` to try at the apex on segment ``g``, most natural first.
+
+    ``steady`` apexes are glides: the mass locked at ``(0, b)`` on an arc or anywhere on a line
+    keeps the sleigh on the curve at constant speed, so a long segment simply glides longer. At a
+    smooth join from curvature k1 to k2 the control rates jump by ``D (k1 - k2) xi2 / |c|`` along
+    ``c``; with the mass at ``(0, b)`` the jump moves the mass backwards (speeding the sleigh up)
+    iff ``b - b*`` has the sign of ``k1 - k2``, where ``b* = -k2 I / M`` is the singular point of
+    the new curvature, so those positions are tried next. Last, on a gently curved arc, where a
+    stop driven from ``a = 0`` needs lateral excursions of about ``2 / |k|``, the line's apex
+    ``(a, 0)`` is tried as an instant (not a glide): the launch runs straight into the stop.
+
+    A spiral (varying curvature) has no glide: every apex on it is an instant at its middle, at
+    ``(0, b)`` for ``b = 0`` and on both sides of the singular point ``b* = -k I / M`` of the
+    curvature ``k`` there, then at the line's apex.
+    """
+    seg = segs[g]
+    scale = params.length_scale
+    if not seg.constant:
+        kg = float(seg.curvature_at(0.5 * seg.length))
+        bstar = -kg * params.I / params.M
+        out = [0.0] + [bstar + d * scale for d in (1.0, -1.0, 2.5, -2.5)]
+        steady = False
+    else:
+        kg = seg.coefficients[0]
+        base = _line_apex(params, ell)
+        if kg == 0.0:
+            return [((base, 0.0), True), ((2.0 * base, 0.0), True), ((4.0 * base, 0.0), True)]
+        if options.glide_lateral is not None:
+            return [((0.0, options.glide_lateral), True)]
+        out = [0.0]
+        # the curvature on the other side of the nearest join that changes it
+        after = next((s.coefficients[0] for s in segs[g + 1:] if s.coefficients[0] != kg), None)
+        before = next((float(s.curvature_at(s.length)) for s in reversed(segs[:g])
+                       if float(s.curvature_at(s.length)) != kg), None)
+        for k2 in (after, before):
+            if k2 is None:
+                continue
+            bstar = -k2 * params.I / params.M
+            sgn = math.copysign(1.0, kg - k2)
+            out += [bstar + sgn * d * scale for d in (1.0, 1.5, 2.5)]
+        steady = True
+    seen: list[float] = []
+    for b in out:
+        if all(abs(b - c) > 1e-12 for c in seen):
+            seen.append(b)
+    instant = _line_apex(params, 0.5 * seg.length)
+    return [((0.0, b), steady) for b in seen] + [((instant, 0.0), False), ((2.0 * instant, 0.0), False)]
+
+
+def _legs_from_apex(segs, g: int, ell_g: float) -> tuple[list, list]:
+    """Legs ``[(coefficients, length), ...]`` of the launch and the stop from an apex on segment ``g``.
+
+    The launch's legs run backwards along the curve from ``ell_g`` into segment ``g`` (a curvature
+    polynomial of the distance back from the apex), the stop's forwards from ``ell_g`` before its end.
+    """
+    seg = segs[g]
+    L = seg.length
+    before = [(shifted_polynomial(seg.coefficients, ell_g, -1.0), ell_g)]
+    before += [(shifted_polynomial(s.coefficients, s.length, -1.0), s.length) for s in reversed(segs[:g])]
+    after = [(shifted_polynomial(seg.coefficients, L - ell_g, 1.0), ell_g)]
+    after += [(s.coefficients, s.length) for s in segs[g + 1:]]
+    return before, after
+
+
+def trace_section(
+    params: SleighParams, section: Section, options: TraceOptions = TraceOptions(), curve_index: int = 0
+) -> SectionTrace:
+    """Find controls that trace ``section`` exactly from rest to rest.
+
+    The glide is placed on each segment in turn (longest first) and at each candidate mass
+    position (:func:`_glide_candidates`). Of the placements whose stop and launch are both found
+    and pass every check (the first that works and up to ``options.search`` tried after it), the
+    one whose mass stays closest to the blade is kept (least largest ``|a|, |b|``, then least peak
+    kinetic energy of the mass); with ``options.placement="first"`` the first is. Never raises for
+    a section that cannot be traced: the result has ``success=False`` and the reason.
+    """
+    segs = section.segments
+    order = sorted(range(len(segs)), key=lambda i: -segs[i].length)
+    kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
+
+    def placements():
+        for g in order:
+            Lg = segs[g].length
+            kg = float(segs[g].curvature_at(0.5 * Lg))
+            ell = min(options.maneuver_length or _auto_maneuver_length(params, kg, Lg), 0.5 * Lg)
+            for glide_ab, steady in _glide_candidates(params, segs, g, ell, options):
+                yield g, kg, Lg, ell, glide_ab, steady
+
+    nfev = attempts = extra = 0
+    first_failure = best = None
+    for g, kg, Lg, ell, glide_ab, steady in placements():
+        if best is not None:
+            if extra >= options.search:
+                break
+            extra += 1
+            if _cannot_win(glide_ab, best[0]):
+                continue  # counted as tried: the same placements are searched as without the shortcut
+        # an instant apex is no glide: the launch and the stop share the whole segment
+        ell_g = ell if steady else 0.5 * Lg
+        before, after = _legs_from_apex(segs, g, ell_g)
+        glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
+                 "kappa": kg, "speed": options.speed}
+        stop, launch = _maneuvers(params, before, after, glide_ab, kw)
+        nfev += stop.nfev + (launch.nfev if launch else 0)
+        attempts += 1
+        attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
+        if not attempt.success:
+            first_failure = first_failure or attempt
+        elif options.placement == "first":
+            return attempt
+        else:
+            key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
+            if best is None or _improves(key, best[0]):
+                best = (key, attempt)
+    if best is not None:
+        return replace(best[1], nfev=nfev)
+    return SectionTrace(
+        success=False, status=first_failure.status,
+        message=first_failure.message + f" (tried {attempts} glide placements: every segment as the glide, "
+        "every candidate mass position)",
+        curve_index=curve_index, section=section, params=params, speed=options.speed, glide=first_failure.glide,
+        residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=nfev,
+    )  # no phases: controls that failed a check are not handed on to be written or replayed
+
+
+# Placement keys this close (relative) are a tie, kept by the first placement: mirror-image
+# placements (a section symmetric under b -> -b, or two equal segments) have the same key but for
+# the rounding of their solves.
+_KEY_TIE = 1e-12
+
+
+def _improves(key: tuple[float, float], best: tuple[float, float]) -> bool:
+    """Whether placement ``key`` (reach, peak kinetic energy) beats ``best``: less reach, then less energy."""
+    for new, old in zip(key, best):
+        if abs(new - old) > _KEY_TIE * max(abs(old), abs(new)):
+            return new < old
+    return False
+
+
+def _cannot_win(glide_ab: tuple[float, float], best_key: tuple[float, float]) -> bool:
+    """Whether a placement with its apex at ``glide_ab`` is sure to reach farther than the best so far.
+
+    The apex is a sampled state of every trace through it (a phase boundary), so the reach of such
+    a trace is at least ``max(|a|, |b|)`` there. The margin covers the rounding of section times
+    when the apex is evaluated; a placement within it is solved, never skipped.
+    """
+    return max(abs(glide_ab[0]), abs(glide_ab[1])) > best_key[0] * (1.0 + 1e-9)
+
+
+def _maneuvers(params: SleighParams, before, after, glide_ab, kw) -> tuple[ManeuverSolution, ManeuverSolution | None]:
+    """The stop from the apex ``glide_ab`` over ``after`` and, if it is found, the launch over ``before``.
+
+    With the mass at ``a = 0`` and the same curve on both sides of the apex the launch is the
+    stop reversed in time (:func:`~skatetrace.tracing.maneuver.mirrored_maneuver`), exactly: it is not
+    solved a second time.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        stop = solve_stop(params, after, glide_ab, 1.0, **kw)
+        if not stop.success:
+            return stop, None
+        if glide_ab[0] == 0.0 and same_legs(before, after):
+            return stop, mirrored_maneuver(stop, before)
+        return stop, solve_stop(params, before, glide_ab, 1.0, backward=True, **kw)
+
+
+def _reach(trace: SectionTrace) -> float:
+    """Largest distance of the mass from the contact point along the blade or across it."""
+    return max(trace.metrics["max_abs_a"], trace.metrics["max_abs_b"])
+
+
+def _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev) -> SectionTrace:
+    base = dict(curve_index=curve_index, section=section, params=params, speed=options.speed, glide=glide, nfev=nfev)
+    if not stop.legs:
+        return SectionTrace(success=False, status=TraceStatus.NO_STOP, message=stop.message, **base)
+    if launch is None or not launch.legs:
+        return SectionTrace(success=False, status=TraceStatus.NO_LAUNCH if launch else TraceStatus.SINGULAR,
+                            message=launch.message if launch else stop.message, **base)
+    glide_len = glide["length"]
+    kg = glide["kappa"]
+    s_launch = sum(ell_ for _, ell_ in before)
+    t_l = -launch.duration
+    phases = (
+        _Phase("launch", 0.0, t_l, launch, 0.0),
+        _Phase("glide", t_l, t_l + glide_len, None, s_launch, kg),
+        _Phase("stop", t_l + glide_len, t_l + glide_len + stop.duration, stop, s_launch + glide_len),
+    )
+    residuals = {
+        "launch_start_speed": abs(launch.residuals["end_speed"]) * options.speed,
+        "stop_end_speed": abs(stop.residuals["end_speed"]) * options.speed,
+        "length": abs(launch.residuals["length"]) + abs(stop.residuals["length"]),
+    }
+    worst = max(residuals.values())
+    singular = min(launch.min_singular_distance, stop.min_singular_distance)
+    if not (launch.success and stop.success):
+        status, msg = TraceStatus.SINGULAR, (launch.message if not launch.success else stop.message)
+    elif worst > options.residual_tol:
+        status, msg = TraceStatus.RESIDUAL, f"largest residual {worst:.3g} > {options.residual_tol:.3g}"
+    else:
+        status, msg = TraceStatus.SUCCESS, TraceStatus.SUCCESS.value
+    trace = SectionTrace(
+        success=status is TraceStatus.SUCCESS, status=status, message=msg, phases=phases,
+        residuals=residuals, **base,
+    )
+    return _with_metrics(trace, singular, options)
+
+
+def _with_metrics(trace: SectionTrace, singular: float, options: TraceOptions) -> SectionTrace:
+    t = np.linspace(0.0, trace.duration, 4001)
+    t = np.unique(np.concatenate([t, trace.breakpoints()]))
+    v = trace.evaluate(t, geometry=False)  # the metrics need no layout of the blade's path
+    ke = mass_energy(trace.params, v["xi1"], v["xi2"], v["a"], v["b"], v["adot"], v["bdot"])
+    metrics = {
+        "duration": trace.duration,
+        "length": trace.length,
+        "peak_abs_adot": float(np.max(np.abs(v["adot"]))),
+        "peak_abs_bdot": float(np.max(np.abs(v["bdot"]))),
+        "peak_mass_kinetic_energy": float(np.max(ke)),
+        "max_abs_a": float(np.max(np.abs(v["a"]))),
+        "max_abs_b": float(np.max(np.abs(v["b"]))),
+        "min_singular_distance": float(singular),
+        "min_speed_inside": float(np.min(np.abs(v["xi2"][1:-1]))) if t.size > 2 else 0.0,
+    }
+    status, message = trace.status, trace.message
+    reach = max(metrics["max_abs_a"], metrics["max_abs_b"])
+    limit = options.excursion_limit * max(trace.params.length_scale, trace.length)
+    interior = v["xi2"][1:-1] * trace.direction
+    if trace.success and (reach > limit or np.any(interior <= 0.0)):
+        status = TraceStatus.EXCURSION
+        message = (f"mass reaches {reach:.3g} from the contact point (limit {limit:.3g})" if reach > limit
+                   else "the blade comes to rest inside the section")
+    return SectionTrace(
+        success=status is TraceStatus.SUCCESS, status=status, message=message, curve_index=trace.curve_index,
+        section=trace.section, params=trace.params, speed=trace.speed, glide=trace.glide,
+        phases=trace.phases, residuals=trace.residuals, metrics=metrics, nfev=trace.nfev,
+    )
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FigureTrace:
+    """Traced sections of a whole figure, in skating order, with the time each one starts."""
+
+    figure: Figure
+    params: SleighParams
+    options: TraceOptions
+    sections: tuple[SectionTrace, ...]
+    start_times: tuple[float, ...]
+
+    @property
+    def success(self) -> bool:
+        return all(s.success for s in self.sections)
+
+    @property
+    def status(self) -> str:
+        return "success" if self.success else "failed"
+
+    @property
+    def message(self) -> str:
+        bad = [s for s in self.sections if not s.success]
+        if not bad:
+            return f"all {len(self.sections)} sections traced exactly"
+        return "; ".join(f"curve {s.curve_index} pieces {[p.index for p in s.section.pieces]}: {s.message}" for s in bad)
+
+    @property
+    def duration(self) -> float:
+        if not self.sections:
+            return 0.0
+        last = self.sections[-1]
+        return self.start_times[-1] + (last.duration if last.phases else 0.0)
+
+
+def _section_key(params: SleighParams, section: Section, options: TraceOptions) -> tuple:
+    return (params, options, tuple((tuple(round(c, 14) for c in s.coefficients), round(s.length, 14))
+                                   for s in section.segments))
+
+
+def trace_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
+                 progress=None, cache: dict | None = None) -> FigureTrace:
+    """Trace every section of every curve of ``figure``.
+
+    Sections that are the same up to a rigid motion (same curvatures and lengths) are solved once.
+    A section that fails is reported and the others are still traced.
+
+    Parameters
+    ----------
+    params : SleighParams, optional
+        Defaults to the figure's own parameters, else the paper's ``M = 2, m = 1, I = 3``.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each section.
+    cache : dict, optional
+        Solved sections by shape; pass the same dict to several calls to reuse them.
+    """
+    params = params or figure.params or SleighParams()
+    cache = {} if cache is None else cache
+    traces, starts, t = [], [], 0.0
+    all_sections = [(ci, sec) for ci, curve in enumerate(figure.curves) for sec in curve.sections()]
+    for done, (ci, sec) in enumerate(all_sections, 1):
+        key = _section_key(params, sec, options)
+        if key not in cache:
+            cache[key] = trace_section(params, sec, options, ci)
+        proto = cache[key]
+        tr = SectionTrace(
+            success=proto.success, status=proto.status, message=proto.message, curve_index=ci, section=sec,
+            params=params, speed=proto.speed, glide=proto.glide, phases=proto.phases,
+            residuals=proto.residuals, metrics=proto.metrics, nfev=proto.nfev,
+        )
+        traces.append(tr)
+        starts.append(t)
+        t += tr.duration if tr.phases else 0.0
+        if progress is not None:
+            progress(done, len(all_sections))
+    return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))

@@ -1,0 +1,468 @@
+"""Independent verification: replay a control schedule through the full five equations.
+
+The replay knows nothing of how the controls were found. It reads the sampled schedule
+(:class:`~skatetrace.dynamics.controls.ControlSchedule`, the content of ``controls.csv``), interpolates it by
+cubic Hermite splines, integrates eqs. (p1_eq)-(y_eq) with DOP853 at tight tolerances, and applies
+at each cusp only what the figure prescribes: the sleigh is at rest, the blade pivots by the
+join's angle, and the momenta are those of the mass's motion at rest. It then measures
+
+- the deviation from the target figure both ways (replayed points to the figure, figure to the
+  replayed path), per section and overall,
+- the speed at every cusp,
+- the drift of ``p1 + r p2`` on each arc and of ``p2`` on each line (both are invariants there;
+  a spiral has no such invariant).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numba import njit
+from scipy.spatial import cKDTree
+
+from ..dynamics.controls import ControlSchedule, sample_intervals
+from ..figures.geometry import distance_to_segment, segment_points
+from ..dynamics.model import SleighParams, momenta, velocities
+from ..dynamics.replayer import replay_chunk
+from ..dynamics.simulate import simulate
+from ..tracing.sections import FigureTrace
+
+__all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
+
+#: Bounds on the dense samples of the replay and of the figure, so that memory stays bounded for
+#: any figure size and speed (figures of ordinary size and duration stay far below them).
+MAX_REPLAY_SAMPLES = 2_000_000
+MAX_FIGURE_SAMPLES = 2_000_000
+
+
+_SAMPLED = ("a", "b", "adot", "bdot", "p1", "p2", "s", "xi1", "xi2", "segment")
+
+
+def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Sample times of one traced section and its controls and momenta there (no layout).
+
+    Both one-sided limits are sampled at every breakpoint: an interval's last row is the limit
+    from the left, the next interval's first row the limit from the right.
+    """
+    def fn(tt, left):
+        v = sec.evaluate(tt, geometry=False)
+        if np.any(left):
+            vl = sec.evaluate(tt[left], side="left", geometry=False)
+            for k in v:
+                v[k][left] = vl[k]
+        return np.vstack([v[k] for k in _SAMPLED])
+
+    spans, rows = sample_intervals(fn, sec.breakpoints(), values=True)
+    v = dict(zip(_SAMPLED, rows))
+    v["segment"] = v["segment"].astype(int)
+    return np.concatenate(spans), v
+
+
+def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
+    """Sample every section's controls densely enough for cubic Hermite interpolation.
+
+    Returns the schedule and the matching solver states (``x, y, theta, p1, p2, xi1, xi2``) at the
+    same rows, for ``controls.csv``.
+    """
+    cols: dict[str, list] = {k: [] for k in ("t", "a", "b", "adot", "bdot", "section", "piece",
+                                              "x", "y", "theta", "p1", "p2", "xi1", "xi2")}
+    # Sections traced once and reused by trace_figure (the same shape elsewhere in the figure)
+    # share their phases, hence their controls: they are sampled once and only laid out anew.
+    sampled: dict[tuple[int, int], tuple[np.ndarray, dict[str, np.ndarray]]] = {}
+    for si, (sec, t_start) in enumerate(zip(trace.sections, trace.start_times)):
+        if not sec.phases:
+            continue
+        key = (id(sec.phases), sec.direction)
+        if key not in sampled:
+            sampled[key] = _sample_section(sec)
+        ts, v = sampled[key]
+        x, y, theta = sec.layout(v["s"], v["segment"])
+        v = dict(v, x=x, y=y, theta=theta)
+        for k in ("a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2"):
+            cols[k].append(v[k])
+        cols["t"].append(t_start + ts)
+        cols["section"].append(np.full(ts.size, si))
+        cols["piece"].append(np.array([p.index for p in sec.section.pieces])[v["segment"]])
+    arr = {k: np.concatenate(v) if v else np.empty(0) for k, v in cols.items()}
+    schedule = ControlSchedule(t=arr["t"], a=arr["a"], b=arr["b"], adot=arr["adot"], bdot=arr["bdot"],
+                               section=arr["section"].astype(int), piece=arr["piece"].astype(int))
+    states = {k: arr[k] for k in ("x", "y", "theta", "p1", "p2", "xi1", "xi2")}
+    return schedule, states
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Replay:
+    """Dense samples of the replayed full dynamics: arrays of shape ``(n,)``, ``section`` labels."""
+
+    t: np.ndarray
+    state: np.ndarray  # (5, n): p1, p2, theta, x, y
+    controls: np.ndarray  # (4, n): a, b, adot, bdot
+    section: np.ndarray
+    piece: np.ndarray
+
+    def velocities(self, params: SleighParams):
+        return velocities(params, self.state[0], self.state[1], *self.controls)
+
+    def take(self, idx) -> "Replay":
+        """The rows ``idx`` (in that order) as a replay of their own."""
+        return Replay(t=self.t[idx], state=self.state[:, idx], controls=self.controls[:, idx],
+                      section=self.section[idx], piece=self.piece[idx])
+
+
+def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13, atol: float = 1e-14,
+           points_per_unit: float = 400.0, engine: str = "compiled") -> Replay:
+    """Integrate the full dynamics under ``schedule``, applying the figure's cusps.
+
+    Parameters
+    ----------
+    rtol, atol : float
+        DOP853's tolerances.
+    points_per_unit : float
+        Density of the returned samples per unit of time (at least 50 per chunk).
+    engine : {"compiled", "scipy"}
+        ``"compiled"`` (default) integrates with :func:`skatetrace.dynamics.replayer.replay_chunk`;
+        ``"scipy"`` with :func:`skatetrace.dynamics.simulate.simulate` (``solve_ivp``), about a hundred
+        times slower, as a cross-check of the first.
+    """
+    if engine not in ("compiled", "scipy"):
+        raise ValueError(f"engine must be 'compiled' or 'scipy', got {engine!r}")
+    params = trace.params
+    ts, states, ctrls, secs, pieces = [], [], [], [], []
+    y = None
+    prev_section = None
+    # Memory is bounded whatever the time scale (a slow --speed or a long figure): beyond
+    # MAX_REPLAY_SAMPLES in all the density drops below points_per_unit.
+    span = float(schedule.t[-1] - schedule.t[0]) if schedule.t.size else 0.0
+    if span * points_per_unit > MAX_REPLAY_SAMPLES:
+        points_per_unit = MAX_REPLAY_SAMPLES / span
+    for i0, i1 in schedule.chunks():
+        si = int(schedule.section[i0])
+        sec = trace.sections[si]
+        t0, t1 = float(schedule.t[i0]), float(schedule.t[i1 - 1])
+        a, b, ad, bd = schedule.a[i0], schedule.b[i0], schedule.adot[i0], schedule.bdot[i0]
+        if si != prev_section:
+            first = sec.section.pieces[0]
+            # Start from the figure's own layout at a curve's start or after a section that could
+            # not be traced (its motion is missing); otherwise carry on from the replay itself.
+            if y is None or first.join_before is None or prev_section != si - 1:
+                theta = first.start.heading + (math.pi if first.direction < 0 else 0.0)
+                x0, y0 = first.start.x, first.start.y
+            else:
+                theta = y[2] + first.join_before.pivot
+                x0, y0 = y[3], y[4]
+            p1, p2 = momenta(params, 0.0, 0.0, a, b, ad, bd)
+            y = np.array([p1, p2, theta, x0, y0])
+            prev_section = si
+
+        n = max(50, int(math.ceil((t1 - t0) * points_per_unit)))
+        tt = np.linspace(t0, t1, n)
+        # NaN where a failed integration did not reach: verify reports it
+        if engine == "compiled":
+            run = replay_chunk(params, y, schedule, i0, i1, tt, rtol=rtol, atol=atol)
+            ys, y_end, cs = run.states, run.y_end, run.controls
+        else:
+            traj = simulate(params, y, schedule.scalar_interpolant(i0, i1), (t0, t1), rtol=rtol, atol=atol)
+            ys, y_end, cs = traj(tt), traj.state[:, -1], np.vstack(schedule.interpolant(i0, i1)(tt))
+        ts.append(tt)
+        states.append(ys)
+        ctrls.append(cs)
+        secs.append(np.full(n, si))
+        idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
+        pieces.append(schedule.piece[i0:i1][idx])
+        y = y_end
+    if not ts:
+        # No section was traced (every one failed): nothing to replay, which verify reports.
+        return Replay(t=np.empty(0), state=np.empty((5, 0)), controls=np.empty((4, 0)),
+                      section=np.empty(0, dtype=int), piece=np.empty(0, dtype=int))
+    return Replay(t=np.concatenate(ts), state=np.hstack(states), controls=np.hstack(ctrls),
+                  section=np.concatenate(secs), piece=np.concatenate(pieces))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class VerificationReport:
+    """Checks of a traced figure against its independent replay. ``success`` if all pass."""
+
+    success: bool
+    status: str
+    message: str
+    figure_size: float
+    tolerance: float
+    max_deviation: float
+    max_deviation_to_figure: float
+    max_deviation_from_figure: float
+    max_cusp_speed: float
+    cusp_speeds: list[float]
+    sections: list[dict[str, Any]]
+    invariant_drift: list[dict[str, Any]]
+    replay: Replay | None = field(default=None, repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "success": self.success, "status": self.status, "message": self.message,
+            "figure_size": self.figure_size, "tolerance": self.tolerance,
+            "max_deviation": self.max_deviation,
+            "max_deviation_replay_to_figure": self.max_deviation_to_figure,
+            "max_deviation_figure_to_replay": self.max_deviation_from_figure,
+            "max_cusp_speed": self.max_cusp_speed, "cusp_speeds": self.cusp_speeds,
+            "sections": self.sections, "invariant_drift": self.invariant_drift,
+        }
+
+
+@njit(cache=True)
+def _hermite_point(x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, u):
+    """Point of the cubic Hermite curve of one interval at ``u`` in [0, 1], with its first two
+    derivatives in ``u``: ``(px, py, dpx, dpy, ddpx, ddpy)``."""
+    h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
+    d00, d10, d01, d11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, 3 * u**2 - 2 * u
+    s00, s10, s01, s11 = 12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2
+    return (h00 * x0 + h10 * h * vx0 + h01 * x1 + h11 * h * vx1,
+            h00 * y0 + h10 * h * vy0 + h01 * y1 + h11 * h * vy1,
+            d00 * x0 + d10 * h * vx0 + d01 * x1 + d11 * h * vx1,
+            d00 * y0 + d10 * h * vy0 + d01 * y1 + d11 * h * vy1,
+            s00 * x0 + s10 * h * vx0 + s01 * x1 + s11 * h * vx1,
+            s00 * y0 + s10 * h * vy0 + s01 * y1 + s11 * h * vy1)
+
+
+@njit(cache=True)
+def _hermite_distance(qx, qy, x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, u):
+    """Distance from ``(qx, qy)`` to the cubic Hermite curve of one interval at ``u`` in [0, 1]."""
+    px, py, _, _, _, _ = _hermite_point(x0, y0, vx0, vy0, x1, y1, vx1, vy1, h, u)
+    return math.hypot(px - qx, py - qy)
+
+
+@njit(cache=True)
+def _golden_distances(qx, qy, t, x, y, vx, vy, cand, best):
+    """Lower ``best[i]`` to the least distance from point i to the interval ``cand[i]``.
+
+    The interval ``(j, j + 1)`` of the samples is interpolated by the cubic Hermite curve of the
+    positions and velocities. Its distance is minimised by golden-section search (24 iterations,
+    to 1e-5 of the interval), then polished by Newton's method on the squared distance inside the
+    final bracket. Every evaluated distance is a distance to the curve, so the least of them is an
+    upper bound of the true one that only gets closer. Intervals out of range or of zero length
+    are skipped.
+    """
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    last = t.size - 2
+    for i in range(qx.size):
+        j = cand[i]
+        if j < 0 or j > last or not t[j + 1] - t[j] > 0.0:
+            continue
+        k = j + 1
+        h = t[k] - t[j]
+        # The curve stays within |x_k - x_j| + 4/27 h (|v_j| + |v_k|) of x_j (the Hermite basis
+        # functions of the velocities peak at 4/27): skip the interval if that cannot beat best.
+        reach = math.hypot(x[k] - x[j], y[k] - y[j]) + 4.0 / 27.0 * h * (
+            math.hypot(vx[j], vy[j]) + math.hypot(vx[k], vy[k]))
+        if math.hypot(qx[i] - x[j], qy[i] - y[j]) - reach > best[i]:
+            continue
+        curve = (x[j], y[j], vx[j], vy[j], x[k], y[k], vx[k], vy[k], h)
+        lo, hi = 0.0, 1.0
+        c, d = hi - g * (hi - lo), lo + g * (hi - lo)
+        fc, fd = _hermite_distance(qx[i], qy[i], *curve, c), _hermite_distance(qx[i], qy[i], *curve, d)
+        for _ in range(24):
+            if fc < fd:
+                hi, d, fd = d, c, fc
+                c = hi - g * (hi - lo)
+                fc = _hermite_distance(qx[i], qy[i], *curve, c)
+            else:
+                lo, c, fc = c, d, fd
+                d = lo + g * (hi - lo)
+                fd = _hermite_distance(qx[i], qy[i], *curve, d)
+        u = 0.5 * (lo + hi)
+        dist = min(fc, fd)
+        for _ in range(4):
+            px, py, dx, dy, ddx, ddy = _hermite_point(*curve, u)
+            ex, ey = px - qx[i], py - qy[i]
+            dist = min(dist, math.hypot(ex, ey))
+            slope = ex * dx + ey * dy
+            curv = dx * dx + dy * dy + ex * ddx + ey * ddy
+            if not curv > 0.0:
+                break
+            step = slope / curv
+            if not lo <= u - step <= hi:
+                break
+            u -= step
+            if step == 0.0:
+                break
+        dist = min(dist, _hermite_distance(qx[i], qy[i], *curve, u))
+        best[i] = min(best[i], dist)
+
+
+def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params: SleighParams) -> np.ndarray:
+    """Distance from target points (2, k) to the replayed path.
+
+    The nearest dense sample is found with a k-d tree; the distance is then minimised over the
+    cubic Hermite interpolant of the positions (velocities from the model) on the two adjacent
+    sample intervals, by golden-section search (compiled), so the chord error of a polyline does not count.
+    """
+    # Chunks share their end instants: a repeated time carries the limits from the left and from the
+    # right, and the blade's speed jumps there with the control rates (the momenta are continuous).
+    # Both rows are kept, so each interval is interpolated with its own one-sided velocities. For
+    # the nearest sample, the two proper intervals (of positive length) before it and the two after
+    # it are searched, however many repeated rows lie between.
+    sel = np.flatnonzero(mask)
+    t = rep.t[sel]
+    st = rep.state[:, sel]
+    ctl = rep.controls[:, sel]
+    _, xi2, _ = velocities(params, st[0], st[1], *ctl)
+    vx, vy = xi2 * np.cos(st[2]), xi2 * np.sin(st[2])
+    x, y = st[3], st[4]
+    _, idx = cKDTree(np.vstack([x, y]).T).query(points.T)
+    best = np.hypot(x[idx] - points[0], y[idx] - points[1])
+    if t.size < 2:
+        return best
+    proper = np.diff(t) > 1e-12 * max(1.0, float(np.max(np.abs(t))))  # interval i = samples (i, i + 1)
+    ids = np.arange(proper.size)
+    # last proper interval ending at or before sample j, first one starting at or after it (-1 / size: none)
+    prev_end = np.maximum.accumulate(np.where(proper, ids, -1))  # index <= i
+    next_start = np.minimum.accumulate(np.where(proper, ids, proper.size)[::-1])[::-1]
+    prev_end = np.concatenate([[-1], prev_end])  # for sample j: intervals with index <= j - 1
+    next_start = np.concatenate([next_start, [proper.size]])  # for sample j: intervals with index >= j
+    p1 = prev_end[idx]
+    p2 = prev_end[np.maximum(p1, 0)]  # the one before (its end is at or before p1's start)
+    n1 = next_start[idx]
+    n2 = next_start[np.minimum(n1 + 1, proper.size)]
+    for cand in (p2, p1, n1, n2):
+        _golden_distances(points[0], points[1], t, x, y, vx, vy, cand, best)
+    return best
+
+
+def _nearer(d: np.ndarray, pts: np.ndarray, placed, xy: np.ndarray) -> np.ndarray:
+    """``d`` lowered to the distance from ``pts`` to a placed piece where that is nearer.
+
+    ``xy`` are 65 points along the piece. A spiral's distance takes Newton iterations, so it is
+    computed only for the points that its bounding disc does not already rule out.
+    """
+    seg = placed.segment
+    if seg.constant:
+        return np.minimum(d, distance_to_segment(pts, placed.start, seg))
+    centre = xy.mean(axis=1)
+    # chords of the 65-point sample lie within L^2 max|k| / (8 * 64^2) of the curve
+    radius = float(np.max(np.hypot(xy[0] - centre[0], xy[1] - centre[1])))
+    radius += seg.length**2 * seg.max_abs_curvature() / (8 * 64**2) + 1e-12 * seg.length
+    near = np.hypot(pts[0] - centre[0], pts[1] - centre[1]) - radius < d
+    out = d.copy()
+    if np.any(near):
+        out[near] = np.minimum(d[near], distance_to_segment(pts[:, near], placed.start, seg))
+    return out
+
+
+def check_rel_tol(rel_tol) -> None:
+    """Refuse a verification tolerance that is not a number in (0, 1]: ``deviation > NaN`` is False,
+    so a NaN tolerance would pass every check."""
+    if isinstance(rel_tol, bool) or not isinstance(rel_tol, (int, float, np.integer, np.floating)) \
+            or not 0.0 < rel_tol <= 1.0:
+        raise ValueError(f"rel_tol must be a number in (0, 1] (a fraction of the figure's size), got {rel_tol!r}")
+
+
+def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_tol: float = 1e-6) -> VerificationReport:
+    """Replay ``trace``'s controls through the full dynamics and measure everything.
+
+    Parameters
+    ----------
+    rel_tol : float
+        Allowed deviation from the figure as a fraction of the figure's size, in (0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``rel_tol`` is not a number in (0, 1] (a NaN tolerance would pass every check).
+    """
+    check_rel_tol(rel_tol)
+    if schedule is None:
+        schedule, _ = schedule_from_trace(trace)
+    params = trace.params
+    size = trace.figure.size()
+    tol = rel_tol * size
+    rep = replay(trace, schedule)
+    bad_cusps = []
+    xi1, xi2, _ = rep.velocities(params)
+    sections, drifts, cusp_speeds = [], [], []
+    dev_to, dev_from = 0.0, 0.0
+    # each section's rows, found once (not with a mask over the whole replay per section)
+    total_length = sum(p.segment.length for sec in trace.sections for p in sec.section.pieces)
+    density = min(200.0, MAX_FIGURE_SAMPLES / max(total_length, 1e-300))  # target points per unit length
+    order = np.argsort(rep.section, kind="stable")
+    cuts = np.searchsorted(rep.section[order], np.arange(len(trace.sections) + 1))
+    for si, sec in enumerate(trace.sections):
+        idx = order[cuts[si]:cuts[si + 1]]
+        if not sec.phases or not idx.size:
+            sections.append({"section": si, "traced": False, "passed": False, "message": sec.message})
+            continue
+        sub = rep.take(idx)
+        sxi1, sxi2 = xi1[idx], xi2[idx]
+        pts = sub.state[3:5]
+        # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
+        samples = [segment_points(p.start, p.segment, 65) for p in sec.section.pieces]
+        d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0]
+        d_from = np.zeros(0)
+        for p, xy in zip(sec.section.pieces, samples):
+            d_to = _nearer(d_to, pts, p, xy)
+            n = max(64, int(p.segment.length * density))
+            # Each piece's points are matched with the stretch of replay labelled with that piece
+            # (one sample more each side): where two pieces pass close to each other, as at the
+            # waist of a figure eight, the nearest sample may otherwise belong to the other one.
+            own = np.flatnonzero(sub.piece == p.index)
+            mp = np.zeros(idx.size, dtype=bool)
+            if own.size:
+                mp[max(own[0] - 1, 0):own[-1] + 2] = True
+            else:
+                mp[:] = True
+            d_from = np.concatenate([d_from, _figure_to_replay(segment_points(p.start, p.segment, n), sub, mp, params)])
+        speeds = (abs(float(sxi2[0])), abs(float(sxi2[-1])))
+        cusp_speeds.extend(speeds)
+        # "At rest" means below 1e-8 of the fastest motion in the section (the glide, the blade, or
+        # the mass relative to the ice): the replay resolves speeds to a fraction of that scale.
+        a, b, ad, bd = sub.controls
+        mass_speed = np.hypot(sxi2 - sxi1 * b + ad, sxi1 * a + bd)
+        speed_scale = max(trace.options.speed, float(np.max(np.abs(sxi2))), float(np.max(mass_speed)))
+        cusp_limit = 1e-8 * speed_scale
+        if max(speeds) > cusp_limit:
+            bad_cusps.append(f"section {si}: {max(speeds):.3g} > {cusp_limit:.3g}")
+        sections.append({
+            "section": si, "traced": True, "pieces": [p.index for p in sec.section.pieces],
+            "max_deviation_replay_to_figure": float(d_to.max()),
+            "max_deviation_figure_to_replay": float(d_from.max()),
+            "start_speed": speeds[0], "end_speed": speeds[1], "speed_scale": speed_scale,
+            "cusp_speed_limit": cusp_limit,
+            "passed": bool(sec.success and max(float(d_to.max()), float(d_from.max())) <= tol
+                           and max(speeds) <= cusp_limit),
+        })
+        dev_to, dev_from = max(dev_to, float(d_to.max())), max(dev_from, float(d_from.max()))
+        for p in sec.section.pieces:
+            mp = sub.piece == p.index
+            if np.count_nonzero(mp) < 2:
+                continue
+            if not p.segment.constant:
+                continue  # a spiral: neither p1 + r p2 nor p2 is conserved
+            k = p.segment.coefficients[0]
+            if k != 0.0:
+                inv = sub.state[0, mp] + sub.state[1, mp] / k
+                name = "p1 + r p2"
+            else:
+                inv = sub.state[1, mp]
+                name = "p2"
+            drifts.append({"piece": p.index, "invariant": name, "drift": float(np.ptp(inv)),
+                           "scale": float(np.max(np.abs(inv)) + 1e-300)})
+    max_dev = max(dev_to, dev_from)
+    if not np.all(np.isfinite(rep.state)):
+        max_dev = math.inf  # the replay broke down somewhere: never let NaN pass a comparison
+    max_cusp = max(cusp_speeds) if cusp_speeds else 0.0
+    problems = []
+    if not trace.success:
+        problems.append(trace.message)
+    if max_dev > tol:
+        problems.append(f"deviation {max_dev:.3g} exceeds {tol:.3g} ({rel_tol:g} x figure size {size:.4g})")
+    if bad_cusps:
+        problems.append("speed at a cusp above 1e-8 of the section's fastest motion (" + "; ".join(bad_cusps) + ")")
+    ok = not problems
+    return VerificationReport(
+        success=ok, status="passed" if ok else "failed",
+        message="all checks passed" if ok else "; ".join(problems),
+        figure_size=size, tolerance=tol, max_deviation=max_dev, max_deviation_to_figure=dev_to,
+        max_deviation_from_figure=dev_from, max_cusp_speed=max_cusp, cusp_speeds=cusp_speeds,
+        sections=sections, invariant_drift=drifts, replay=rep,
+    )
