@@ -66,7 +66,7 @@ def test_failed_verification_exits_1_and_still_writes_everything(tmp_path, capsy
 
 def test_result_json_round_trips_the_figure(tmp_path):
     from skatetrace import pattern
-    from skatetrace.outputs.io import load_result
+    from skatetrace.outputs.results import load_result
 
     out = tmp_path / "out"
     assert main(["trace", "s-bend", "--out", str(out), "--no-plots"]) == 0
@@ -181,7 +181,7 @@ from pathlib import Path
 
 import skatetrace
 from skatetrace.cli import commands as cli
-from skatetrace.outputs.io import MANIFEST
+from skatetrace.outputs.folder import MANIFEST
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 PLOTS = {"figure.png", "controls.png", "speed.png", "mass_path.png", "energies.png"}
@@ -265,12 +265,12 @@ def test_a_folder_made_for_a_run_that_fails_is_removed(tmp_path, capsys):
 
 
 def test_a_write_that_fails_is_an_error_not_a_traceback(tmp_path, capsys, monkeypatch):
-    import skatetrace.outputs.io
+    import skatetrace.outputs.results
 
     def full(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(skatetrace.outputs.io, "write_results", full)
+    monkeypatch.setattr(skatetrace.outputs.results, "write_results", full)
     assert main(["trace", "circle", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 2
     assert "skatetrace: error: [Errno 28] No space left on device" in capsys.readouterr().err
 

@@ -14,7 +14,7 @@ from skatetrace.cli import main
 from skatetrace.dynamics.controls import ControlSchedule
 from skatetrace.dynamics.presets import MOVING_FRACTION
 from skatetrace.verification.feasibility import PAPER_FIGURE_SIZE, HumanLimits, assess_feasibility, exported_peaks
-from skatetrace.outputs.io import read_controls
+from skatetrace.outputs.results import read_controls
 
 
 def _strict(text: str):

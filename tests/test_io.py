@@ -2,7 +2,7 @@ import os
 
 import pytest
 
-from skatetrace.outputs.io import atomic_write
+from skatetrace.outputs.files import atomic_write
 
 
 def test_atomic_write_replaces_whole_file(tmp_path):
@@ -31,7 +31,7 @@ def test_result_records_every_tracer_setting():
     from dataclasses import asdict
 
     import skatetrace as st
-    from skatetrace.outputs.io import result_dict
+    from skatetrace.outputs.results import result_dict
 
     options = st.TraceOptions(speed=1.5, placement="first", search=3)
     d = result_dict(st.trace_figure(st.pattern("circle"), options=options))
@@ -50,8 +50,8 @@ import sys
 import numpy as np
 
 from skatetrace.errors import SkatetraceError
-from skatetrace.outputs.io import (MANIFEST, OutputFolder, adopt, check_output_file, check_output_folder, dumps_json,
-                           file_mode, write_atomically)
+from skatetrace.outputs.folder import MANIFEST, OutputFolder, adopt, check_output_file, check_output_folder
+from skatetrace.outputs.files import dumps_json, file_mode, write_atomically
 
 
 def strict_loads(text):
@@ -78,7 +78,7 @@ def test_dumps_json_writes_null_for_nan_and_infinities():
 
 def _read_umask_in_child(umask):
     code = ("import os, pathlib, sys; os.umask(int(sys.argv[1], 8)); "
-            "from skatetrace.outputs.io import atomic_write, file_mode; p = pathlib.Path(sys.argv[2]); "
+            "from skatetrace.outputs.files import atomic_write, file_mode; p = pathlib.Path(sys.argv[2]); "
             "atomic_write(p, 'x'); print(oct(os.stat(p).st_mode & 0o777), oct(file_mode()))")
     return code
 

@@ -7,7 +7,7 @@ import pytest
 
 from skatetrace.cli import main
 from skatetrace.errors import SkatetraceError
-from skatetrace.outputs.io import read_controls
+from skatetrace.outputs.results import read_controls
 from skatetrace.outputs.playback import load_playback
 
 

@@ -34,7 +34,7 @@ from matplotlib.figure import Figure
 from PIL import Image
 
 from ..errors import SkatetraceError
-from .io import write_atomically
+from .files import write_atomically
 from .playback import Playback
 
 __all__ = ["AnimationOptions", "AnimationResult", "animate", "render_frame", "render_rgb", "save_still",

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import SkatetraceError
 from ..figures.geometry import segment_points
-from .io import load_result, read_controls
+from .results import load_result, read_controls
 from ..dynamics.model import SleighParams, mass_energy
 
 __all__ = ["Playback", "load_playback"]

@@ -234,7 +234,7 @@ def save_all(trace: FigureTrace, report: VerificationReport, out, *, unit: str =
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from .io import atomic_write
+    from .files import atomic_write
 
     axis_units(unit)  # a bad unit fails before anything is drawn
     out = Path(out)

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import atomic_write
+from .files import atomic_write
 from .playback import Playback, load_playback
 
 __all__ = ["viewer_html", "write_viewer", "sample_rows", "default_speed", "SPEED_FACTORS"]

@@ -1,11 +1,4 @@
-"""Writing results: ``result.json``, ``controls.csv``, ``report.json``, written atomically.
-
-Every file is written to a temporary file in the same folder and then renamed, so an interrupted
-run never leaves a half-written result behind. The file gets the permissions a plain ``open`` would
-give it (``0o666`` less the process's umask), not the ``0600`` of the temporary file.
-
-JSON is strict everywhere (:func:`dumps_json`): NaN and infinities are written as ``null``, never as
-the bare ``NaN`` that JSON parsers other than Python's reject.
+"""Output folders: checked before any work, and holding one run's files at a time.
 
 An output folder (:class:`OutputFolder`) is checked before any work and keeps a manifest,
 ``.skatetrace-manifest.json``, of the files skatetrace wrote there; a later run into the same folder
@@ -15,234 +8,22 @@ Files skatetrace did not write are never touched.
 
 from __future__ import annotations
 
-import contextvars
-import csv
+import contextlib
 import json
-from dataclasses import asdict
-import math
 import os
 import tempfile
 from pathlib import Path, PurePosixPath
-from typing import Any, Callable
+from typing import Any
 
-import numpy as np
-
-from ..dynamics.controls import ControlSchedule
 from ..errors import SkatetraceError
-from ..verification.feasibility import Feasibility
-from ..tracing.sections import FigureTrace
-from ..verification.verify import VerificationReport
+from .files import atomic_write, dumps_json, record_writes
 
-__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "MANIFEST", "atomic_write", "write_atomically", "dumps_json",
-           "file_mode", "check_output_folder", "check_output_file", "OutputFolder", "adopt", "result_dict",
-           "write_results", "load_result", "read_controls"]
-
-SCHEMA_VERSION = "skatetrace.result/1"
-CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2")
+__all__ = ["MANIFEST", "check_output_folder", "check_output_file", "OutputFolder", "adopt"]
 
 #: The list of files skatetrace wrote into an output folder (see :class:`OutputFolder`).
 MANIFEST = ".skatetrace-manifest.json"
 _MANIFEST_SCHEMA = "skatetrace.manifest/1"
 
-# The output folders whose writes are being recorded (see OutputFolder), innermost last.
-_RECORDERS: contextvars.ContextVar[tuple["OutputFolder", ...]] = contextvars.ContextVar("_RECORDERS", default=())
-
-
-def _umask() -> int:
-    """The process's umask, read without changing it where the system allows (Linux: /proc)."""
-    try:
-        with open("/proc/self/status", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    # Elsewhere the only way is to set it and put it back (process-wide, for an instant).
-    old = os.umask(0o022)
-    os.umask(old)
-    return old
-
-
-def file_mode() -> int:
-    """The permissions a new file gets from ``open``: ``0o666`` less the umask (``0o644`` under umask 022)."""
-    return 0o666 & ~_umask()
-
-
-def write_atomically(path: str | Path, write: Callable[[Path], None]) -> None:
-    """Have ``write(tmp)`` write a temporary file next to ``path``, then rename it onto ``path``.
-
-    The temporary name keeps ``path``'s suffix (writers that choose a format by it still can). On
-    any failure, an interrupt included, the temporary file is removed and ``path`` is untouched.
-    The file ends with the permissions of :func:`file_mode` (the temporary file is created ``0600``).
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix.lower()}", dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        os.chmod(tmp, file_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    for folder in _RECORDERS.get():
-        folder._record(path)
-
-
-def atomic_write(path: str | Path, data: str | bytes) -> None:
-    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file and an atomic rename."""
-    if isinstance(data, bytes):
-        write_atomically(path, lambda tmp: tmp.write_bytes(data))
-    else:
-        write_atomically(path, lambda tmp: tmp.write_text(data, encoding="utf-8", newline=""))
-
-
-def _clean(obj: Any) -> Any:
-    """JSON-safe copy: numpy scalars and arrays to Python, non-finite floats to None."""
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
-
-
-def dumps_json(obj: Any, *, indent: int | None = 2) -> str:
-    """``obj`` as strict JSON: numpy values made Python ones, NaN and infinities written as ``null``.
-
-    Raises
-    ------
-    TypeError
-        A value JSON cannot represent (a set, an object).
-
-    Examples
-    --------
-    >>> dumps_json({"a": float("nan"), "b": [np.float64(1.5), float("inf")]}, indent=None)
-    '{"a": null, "b": [1.5, null]}'
-    """
-    return json.dumps(_clean(obj), indent=indent, allow_nan=False)
-
-
-_STATE_KEYS = ("p1", "p2", "theta", "x", "y", "a", "b", "adot", "bdot", "xi1", "xi2")
-
-
-def result_dict(trace: FigureTrace) -> dict[str, Any]:
-    """Everything needed to understand and reproduce a traced figure, as plain data.
-
-    Per section: its pieces, each with the time it starts and the state there; the phases with
-    their controls; the join (cusp, pivot) before it; residuals, metrics and status.
-    """
-    sections = []
-    for sec, t0 in zip(trace.sections, trace.start_times):
-        d = sec.to_dict()
-        d["start_time"] = t0
-        pieces = []
-        starts = np.cumsum([0.0] + [p.segment.length for p in sec.section.pieces[:-1]])
-        if sec.phases:
-            times = sec.time_at_length(starts)
-            times[0] = 0.0
-            states = sec.evaluate(times)
-        for i, p in enumerate(sec.section.pieces):
-            entry: dict[str, Any] = {"index": p.index, "curvature": p.segment.coefficients[0],
-                                     "length": p.segment.length, "direction": p.direction}
-            if not p.segment.constant:
-                entry["curvature"] = None
-                entry["curvature_coefficients"] = list(p.segment.coefficients)
-            if sec.phases:
-                entry["start_time"] = t0 + float(times[i])
-                entry["initial_state"] = {k: float(states[k][i]) for k in _STATE_KEYS}
-            pieces.append(entry)
-        d["pieces"] = pieces
-        join = sec.section.pieces[0].join_before
-        d["join_before"] = join.to_dict() if join is not None else None
-        sections.append(d)
-    curves = []
-    for c in trace.figure.curves:
-        centre = c.unit_centre() if c.repeat > 1 or c.closing is not None else None
-        curves.append({"name": c.name, "closure": c.closure(), "repeat_centre": centre})
-    return _clean({
-        "schema": SCHEMA_VERSION,
-        "success": trace.success, "status": trace.status, "message": trace.message,
-        "params": trace.params.to_dict(),
-        "options": asdict(trace.options),  # every setting of the tracer, so that a run can be repeated
-        "figure": trace.figure.to_dict(),
-        "curves": curves,
-        "duration": trace.duration,
-        "sections": sections,
-    })
-
-
-def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
-    """``controls.csv``: floats as their shortest round-trip ``repr``, one column at a time."""
-    cols = {"piece": schedule.piece, "t": schedule.t, "a": schedule.a, "b": schedule.b,
-            "adot": schedule.adot, "bdot": schedule.bdot, **states}
-    text = [list(map(str, np.asarray(cols["piece"], dtype=int).tolist()))]
-    text += [list(map(repr, np.asarray(cols[k], dtype=float).tolist())) for k in CSV_COLUMNS[1:]]
-    return "\n".join([",".join(CSV_COLUMNS), *map(",".join, zip(*text))]) + "\n"
-
-
-def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,
-                  states: dict[str, np.ndarray], report: VerificationReport | None, unit: str = "model",
-                  feasibility: Feasibility | None = None) -> list[Path]:
-    """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``.
-
-    ``unit`` (``"m"`` or ``"model"``) is recorded in ``result.json`` for the readers of the files.
-    ``feasibility`` (:class:`~skatetrace.verification.feasibility.Feasibility`), the second verdict, goes into
-    ``report.json`` beside the verification, with both verdicts in one line under ``"verdict"``.
-    """
-    out = Path(out)
-    written = []
-    atomic_write(out / "result.json", dumps_json({**result_dict(trace), "unit": unit}))
-    written.append(out / "result.json")
-    atomic_write(out / "controls.csv", _csv_text(schedule, states))
-    written.append(out / "controls.csv")
-    if report is not None:
-        data = {"schema": "skatetrace.report/1", **report.to_dict()}
-        if feasibility is not None:
-            data["verdict"] = feasibility.verdict(bool(report.success and trace.success))
-            data["feasibility"] = feasibility.to_dict()
-        atomic_write(out / "report.json", dumps_json(data))
-        written.append(out / "report.json")
-    return written
-
-
-def load_result(path: str | Path) -> dict[str, Any]:
-    """Read ``result.json``; its ``"figure"`` entry is returned as a :class:`~skatetrace.Figure`."""
-    from ..figures.figure import figure_from_dict
-
-    path = Path(path)
-    data = json.loads(path.read_text(encoding="utf-8"))
-    if data.get("schema") != SCHEMA_VERSION:
-        raise ValueError(f"{path}: expected schema {SCHEMA_VERSION!r}, got {data.get('schema')!r}")
-    data["figure"] = figure_from_dict(data["figure"])
-    return data
-
-
-def read_controls(path: str | Path) -> dict[str, np.ndarray]:
-    """Read ``controls.csv`` back into columns (``piece`` as int)."""
-    path = Path(path)
-    with path.open(encoding="utf-8", newline="") as fh:
-        rows = list(csv.reader(fh))
-    if not rows or tuple(rows[0]) != CSV_COLUMNS:
-        raise ValueError(f"{path}: expected header {','.join(CSV_COLUMNS)}")
-    data = np.array(rows[1:], dtype=float).reshape(-1, len(CSV_COLUMNS))
-    out = {k: data[:, i] for i, k in enumerate(CSV_COLUMNS)}
-    out["piece"] = out["piece"].astype(int)
-    return out
-
-
-# ----------------------------------------------------------------------------------------------------------
-# Output folders: checked before any work; the files of an earlier run that this run does not write removed
 
 
 def _nearest_existing(path: Path) -> Path:
@@ -476,14 +257,16 @@ class OutputFolder:
         manifest = _read_manifest(self.path)
         self.before: tuple[str, ...] = tuple(manifest["files"] if manifest is not None else _legacy_files(self.path))
         self.written: list[str] = []
-        self._tokens: list[contextvars.Token] = []
+        self._recording: list[contextlib.ExitStack] = []
 
     def __enter__(self) -> "OutputFolder":
-        self._tokens.append(_RECORDERS.set((*_RECORDERS.get(), self)))
+        stack = contextlib.ExitStack()
+        stack.enter_context(record_writes(self._record))
+        self._recording.append(stack)
         return self
 
     def __exit__(self, *exc) -> None:
-        _RECORDERS.reset(self._tokens.pop())
+        self._recording.pop().close()
 
     def _record(self, path: Path) -> None:
         rel = _relative(self._abs, path)

@@ -1,0 +1,131 @@
+"""Files written atomically, with ordinary permissions, and JSON written strictly.
+
+Every file is written to a temporary file in the same folder and then renamed, so an interrupted
+run never leaves a half-written file behind. The file gets the permissions a plain ``open`` would
+give it (``0o666`` less the process's umask), not the ``0600`` of the temporary file.
+
+JSON is strict everywhere (:func:`dumps_json`): NaN and infinities are written as ``null``, never as
+the bare ``NaN`` that JSON parsers other than Python's reject.
+
+Whoever needs to know which files a run wrote (an :class:`~skatetrace.outputs.folder.OutputFolder`)
+registers a callback with :func:`record_writes`; every atomic write calls it with the path written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import json
+import math
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["atomic_write", "write_atomically", "dumps_json", "json_safe", "file_mode", "record_writes"]
+
+# The callbacks told of every file written atomically (see record_writes), innermost last.
+_RECORDERS: contextvars.ContextVar[tuple[Callable[[Path], None], ...]] = contextvars.ContextVar(
+    "_RECORDERS", default=())
+
+
+@contextlib.contextmanager
+def record_writes(recorder: Callable[[Path], None]) -> Iterator[None]:
+    """Within the ``with`` block, call ``recorder(path)`` after every file :func:`write_atomically` writes.
+
+    Blocks nest (every active recorder is called); the registration is per thread and per task
+    (a context variable).
+    """
+    token = _RECORDERS.set((*_RECORDERS.get(), recorder))
+    try:
+        yield
+    finally:
+        _RECORDERS.reset(token)
+
+
+def _umask() -> int:
+    """The process's umask, read without changing it where the system allows (Linux: /proc)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    # Elsewhere the only way is to set it and put it back (process-wide, for an instant).
+    old = os.umask(0o022)
+    os.umask(old)
+    return old
+
+
+def file_mode() -> int:
+    """The permissions a new file gets from ``open``: ``0o666`` less the umask (``0o644`` under umask 022)."""
+    return 0o666 & ~_umask()
+
+
+def write_atomically(path: str | Path, write: Callable[[Path], None]) -> None:
+    """Have ``write(tmp)`` write a temporary file next to ``path``, then rename it onto ``path``.
+
+    The temporary name keeps ``path``'s suffix (writers that choose a format by it still can). On
+    any failure, an interrupt included, the temporary file is removed and ``path`` is untouched.
+    The file ends with the permissions of :func:`file_mode` (the temporary file is created ``0600``).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix.lower()}", dir=path.parent)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.chmod(tmp, file_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    for recorder in _RECORDERS.get():
+        recorder(path)
+
+
+def atomic_write(path: str | Path, data: str | bytes) -> None:
+    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file and an atomic rename."""
+    if isinstance(data, bytes):
+        write_atomically(path, lambda tmp: tmp.write_bytes(data))
+    else:
+        write_atomically(path, lambda tmp: tmp.write_text(data, encoding="utf-8", newline=""))
+
+
+def json_safe(obj: Any) -> Any:
+    """JSON-safe copy: numpy scalars and arrays to Python, non-finite floats to None."""
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def dumps_json(obj: Any, *, indent: int | None = 2) -> str:
+    """``obj`` as strict JSON: numpy values made Python ones, NaN and infinities written as ``null``.
+
+    Raises
+    ------
+    TypeError
+        A value JSON cannot represent (a set, an object).
+
+    Examples
+    --------
+    >>> dumps_json({"a": float("nan"), "b": [np.float64(1.5), float("inf")]}, indent=None)
+    '{"a": null, "b": [1.5, null]}'
+    """
+    return json.dumps(json_safe(obj), indent=indent, allow_nan=False)

@@ -1,0 +1,136 @@
+"""The result files of a trace: ``result.json``, ``controls.csv`` and ``report.json``, written and read.
+
+``result.json`` (schema :data:`SCHEMA_VERSION`) holds everything needed to understand and
+reproduce the traced figure, ``controls.csv`` (columns :data:`CSV_COLUMNS`) the sampled controls
+with the states along them, ``report.json`` the verification and the feasibility verdict. Every
+file is written atomically and as strict JSON (:mod:`skatetrace.outputs.files`).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..dynamics.controls import ControlSchedule
+from ..tracing.sections import FigureTrace
+from ..verification.feasibility import Feasibility
+from ..verification.verify import VerificationReport
+from .files import atomic_write, dumps_json, json_safe
+
+__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "result_dict", "write_results", "load_result", "read_controls"]
+
+SCHEMA_VERSION = "skatetrace.result/1"
+CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2")
+
+
+_STATE_KEYS = ("p1", "p2", "theta", "x", "y", "a", "b", "adot", "bdot", "xi1", "xi2")
+
+
+def result_dict(trace: FigureTrace) -> dict[str, Any]:
+    """Everything needed to understand and reproduce a traced figure, as plain data.
+
+    Per section: its pieces, each with the time it starts and the state there; the phases with
+    their controls; the join (cusp, pivot) before it; residuals, metrics and status.
+    """
+    sections = []
+    for sec, t0 in zip(trace.sections, trace.start_times):
+        d = sec.to_dict()
+        d["start_time"] = t0
+        pieces = []
+        starts = np.cumsum([0.0] + [p.segment.length for p in sec.section.pieces[:-1]])
+        if sec.phases:
+            times = sec.time_at_length(starts)
+            times[0] = 0.0
+            states = sec.evaluate(times)
+        for i, p in enumerate(sec.section.pieces):
+            entry: dict[str, Any] = {"index": p.index, "curvature": p.segment.coefficients[0],
+                                     "length": p.segment.length, "direction": p.direction}
+            if not p.segment.constant:
+                entry["curvature"] = None
+                entry["curvature_coefficients"] = list(p.segment.coefficients)
+            if sec.phases:
+                entry["start_time"] = t0 + float(times[i])
+                entry["initial_state"] = {k: float(states[k][i]) for k in _STATE_KEYS}
+            pieces.append(entry)
+        d["pieces"] = pieces
+        join = sec.section.pieces[0].join_before
+        d["join_before"] = join.to_dict() if join is not None else None
+        sections.append(d)
+    curves = []
+    for c in trace.figure.curves:
+        centre = c.unit_centre() if c.repeat > 1 or c.closing is not None else None
+        curves.append({"name": c.name, "closure": c.closure(), "repeat_centre": centre})
+    return json_safe({
+        "schema": SCHEMA_VERSION,
+        "success": trace.success, "status": trace.status, "message": trace.message,
+        "params": trace.params.to_dict(),
+        "options": asdict(trace.options),  # every setting of the tracer, so that a run can be repeated
+        "figure": trace.figure.to_dict(),
+        "curves": curves,
+        "duration": trace.duration,
+        "sections": sections,
+    })
+
+
+def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
+    """``controls.csv``: floats as their shortest round-trip ``repr``, one column at a time."""
+    cols = {"piece": schedule.piece, "t": schedule.t, "a": schedule.a, "b": schedule.b,
+            "adot": schedule.adot, "bdot": schedule.bdot, **states}
+    text = [list(map(str, np.asarray(cols["piece"], dtype=int).tolist()))]
+    text += [list(map(repr, np.asarray(cols[k], dtype=float).tolist())) for k in CSV_COLUMNS[1:]]
+    return "\n".join([",".join(CSV_COLUMNS), *map(",".join, zip(*text))]) + "\n"
+
+
+def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,
+                  states: dict[str, np.ndarray], report: VerificationReport | None, unit: str = "model",
+                  feasibility: Feasibility | None = None) -> list[Path]:
+    """Write ``result.json``, ``controls.csv`` and (if given) ``report.json`` into ``out``.
+
+    ``unit`` (``"m"`` or ``"model"``) is recorded in ``result.json`` for the readers of the files.
+    ``feasibility`` (:class:`~skatetrace.verification.feasibility.Feasibility`), the second verdict, goes into
+    ``report.json`` beside the verification, with both verdicts in one line under ``"verdict"``.
+    """
+    out = Path(out)
+    written = []
+    atomic_write(out / "result.json", dumps_json({**result_dict(trace), "unit": unit}))
+    written.append(out / "result.json")
+    atomic_write(out / "controls.csv", _csv_text(schedule, states))
+    written.append(out / "controls.csv")
+    if report is not None:
+        data = {"schema": "skatetrace.report/1", **report.to_dict()}
+        if feasibility is not None:
+            data["verdict"] = feasibility.verdict(bool(report.success and trace.success))
+            data["feasibility"] = feasibility.to_dict()
+        atomic_write(out / "report.json", dumps_json(data))
+        written.append(out / "report.json")
+    return written
+
+
+def load_result(path: str | Path) -> dict[str, Any]:
+    """Read ``result.json``; its ``"figure"`` entry is returned as a :class:`~skatetrace.Figure`."""
+    from ..figures.figure import figure_from_dict
+
+    path = Path(path)
+    data = json.loads(path.read_text(encoding="utf-8"))
+    if data.get("schema") != SCHEMA_VERSION:
+        raise ValueError(f"{path}: expected schema {SCHEMA_VERSION!r}, got {data.get('schema')!r}")
+    data["figure"] = figure_from_dict(data["figure"])
+    return data
+
+
+def read_controls(path: str | Path) -> dict[str, np.ndarray]:
+    """Read ``controls.csv`` back into columns (``piece`` as int)."""
+    path = Path(path)
+    with path.open(encoding="utf-8", newline="") as fh:
+        rows = list(csv.reader(fh))
+    if not rows or tuple(rows[0]) != CSV_COLUMNS:
+        raise ValueError(f"{path}: expected header {','.join(CSV_COLUMNS)}")
+    data = np.array(rows[1:], dtype=float).reshape(-1, len(CSV_COLUMNS))
+    out = {k: data[:, i] for i, k in enumerate(CSV_COLUMNS)}
+    out["piece"] = out["piece"].astype(int)
+    return out
