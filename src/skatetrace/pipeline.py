@@ -1,4 +1,9 @@
-"""Trace, verify, and bring the skater to rest at smooth joins where a replay strays.
+"""The pipeline: trace a figure, verify it by replay, rest at smooth joins where a replay strays, judge feasibility.
+
+:func:`trace_and_verify` is the main entry of the library (``skatetrace trace`` calls it): it joins
+the stages below it, tracing (:mod:`skatetrace.tracing`) and verification
+(:mod:`skatetrace.verification`), and returns a :class:`VerifiedTrace` holding the trace, its
+control schedule, the verification report and the plausibility verdict.
 
 A section is traced from rest to rest by one launch, one glide and one stop, so on a section of
 many pieces the launch or the stop runs through several of them. The full dynamics amplifies
@@ -24,10 +29,10 @@ from typing import Any, Iterable
 import numpy as np
 
 from .dynamics.controls import ControlSchedule
-from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
-from .figures.figure import Figure, Section
 from .dynamics.model import SleighParams
+from .figures.figure import Figure, Section
 from .tracing.sections import FigureTrace, TraceOptions, trace_figure
+from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
 
 __all__ = ["REST_POLICIES", "VerifiedTrace", "add_rests", "middle_join", "trace_and_verify"]

@@ -156,7 +156,7 @@ def _fit_summary(res) -> dict:
 
 
 def _write_fit(res, out: Path, plots: bool) -> list[Path]:
-    from ..outputs.io import atomic_write, dumps_json, write_atomically
+    from ..outputs.files import atomic_write, dumps_json, write_atomically
 
     written = [out / "fit.json"]
     atomic_write(out / "fit.json", dumps_json(_fit_summary(res)))  # strict JSON: NaN written as null
@@ -232,7 +232,7 @@ def _compile_once() -> None:
 
 
 def _trace(args) -> int:
-    from ..outputs.io import write_results
+    from ..outputs.results import write_results
     from ..pipeline import trace_and_verify
 
     t0 = time.perf_counter()
@@ -359,7 +359,7 @@ def _still_time(args, pb) -> float:
 
 def _animate(args) -> int:
     from ..outputs.animation import SUFFIXES, STILL_SUFFIXES, AnimationOptions, animate, save_still
-    from ..outputs.io import check_output_file
+    from ..outputs.folder import check_output_file
     from ..outputs.playback import load_playback
 
     t0 = time.perf_counter()
@@ -384,7 +384,7 @@ def _animate(args) -> int:
 
 
 def _view(args) -> int:
-    from ..outputs.io import adopt, check_output_file
+    from ..outputs.folder import adopt, check_output_file
     from ..outputs.playback import load_playback
     from ..outputs.viewer import write_viewer
 
@@ -491,7 +491,7 @@ def _run(args) -> int:
 
 def _output_folder(args):
     """The ``--out`` folder of ``trace``, ``fit`` and ``reproduce``, checked (and created) before any work."""
-    from ..outputs.io import OutputFolder
+    from ..outputs.folder import OutputFolder
 
     if args.command in ("trace", "fit"):
         return OutputFolder(args.out, args.command)

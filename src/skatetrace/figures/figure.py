@@ -23,9 +23,9 @@ from typing import Any
 
 import numpy as np
 
+from ..dynamics.model import SleighParams
 from ..errors import FigureFormatError
 from .geometry import Pose, Segment, Spiral, end_pose, rigid_motion_centre
-from ..dynamics.model import SleighParams
 
 __all__ = ["Join", "Curve", "Figure", "Placed", "Section", "SMOOTH", "figure_from_dict", "load_figure"]
 

@@ -14,10 +14,10 @@ import math
 
 from scipy.optimize import brentq
 
+from ..dynamics.model import SleighParams
 from ..errors import FigureFormatError
 from .figure import SMOOTH, Curve, Figure, Join
 from .geometry import Segment
-from ..dynamics.model import SleighParams
 
 __all__ = ["pattern", "pattern_names"]
 

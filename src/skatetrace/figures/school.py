@@ -64,10 +64,10 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+from ..dynamics.model import SleighParams
 from ..errors import FigureFormatError
 from .figure import SMOOTH, Curve, Figure, Join
 from .geometry import Pose, Segment
-from ..dynamics.model import SleighParams
 
 __all__ = ["BLADE", "TURN_RADIUS", "DIRECTIONS", "EDGES", "FEET", "school_figure", "school_names"]
 

@@ -16,10 +16,10 @@ from typing import Any
 
 import numpy as np
 
+from ..dynamics.model import SleighParams, mass_energy
 from ..errors import SkatetraceError
 from ..figures.geometry import segment_points
 from .results import load_result, read_controls
-from ..dynamics.model import SleighParams, mass_energy
 
 __all__ = ["Playback", "load_playback"]
 

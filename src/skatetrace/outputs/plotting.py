@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..figures.geometry import segment_points
 from ..dynamics.model import mass_energy, skate_energy
+from ..figures.geometry import segment_points
 
 if TYPE_CHECKING:  # annotations only: importing plotting does not load the tracer
     from ..tracing.sections import FigureTrace

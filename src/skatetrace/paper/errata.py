@@ -13,8 +13,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..tracing.maneuver import constrained_rates
 from ..dynamics.model import SleighParams, mass_energy, skate_energy
+from ..tracing.maneuver import constrained_rates
 from .controls import b_rate_printed
 from .evaluate import ArcEvaluation
 from .tables import PaperRow

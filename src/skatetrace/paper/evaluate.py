@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..verification.deviation import deviation_cost, segments_target
-from ..figures.figure import Curve, Figure
-from ..figures.geometry import Pose, Segment
 from ..dynamics.model import SleighParams, mass_energy, singular_point, skate_energy, velocities
 from ..dynamics.simulate import simulate
+from ..figures.figure import Curve, Figure
+from ..figures.geometry import Pose, Segment
 from ..tracing.sections import TraceOptions, trace_figure
+from ..verification.deviation import deviation_cost, segments_target
 from ..verification.verify import schedule_from_trace, verify
 from .controls import CircularControl, b_rate_printed, control_from_params
 from .procedure import _cost_of

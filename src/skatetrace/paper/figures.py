@@ -33,8 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..figures.geometry import Pose, segment_points
 from ..dynamics.model import SleighParams, mass_energy, skate_energy
+from ..figures.geometry import Pose, segment_points
 from ..outputs.plotting import axis_units
 from .tables import METHODS
 
@@ -557,7 +557,7 @@ def plot_endpoints(pairs, fig=None):
 
 
 def _save(fig, path: Path) -> Path:
-    from ..outputs.io import atomic_write
+    from ..outputs.files import atomic_write
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=_DPI)

@@ -36,17 +36,17 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..outputs.io import atomic_write
 from ..dynamics.model import SleighParams
+from ..outputs.files import atomic_write
 from ..tracing.sections import TraceOptions
 from .conditioning import (Conditioning, Perturbation, Spread, condition_cost, condition_exact_arc,
                            condition_paper_arc, perturbations)
+from .controls import control_from_params
 from .errata import Erratum, find_errata
 from .evaluate import ArcEvaluation, evaluate_exact_arc, evaluate_paper_arc
-from .singular import Crossing, approach_a_zero
 from .procedure import ProcedureResult, RoundingStudy, best_within_rounding, run_procedure
 from .reduced import PAPER_SOLVER, TIGHT_SOLVER, ReducedOptions, integrate_reduced
-from .controls import control_from_params
+from .singular import Crossing, approach_a_zero
 from .tables import METHODS, PaperRow, paper_row, paper_rows
 
 __all__ = ["RowResult", "Reproduction", "reproduce", "reading_study", "write_report", "strict_json"]

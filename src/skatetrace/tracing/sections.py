@@ -28,10 +28,10 @@ from typing import Any
 
 import numpy as np
 
+from ..dynamics.model import SleighParams, mass_energy, velocities
 from ..figures.figure import Figure, Section
 from ..figures.geometry import shifted_polynomial, travel
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
-from ..dynamics.model import SleighParams, mass_energy, velocities
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
 

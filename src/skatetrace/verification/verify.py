@@ -24,10 +24,10 @@ from numba import njit
 from scipy.spatial import cKDTree
 
 from ..dynamics.controls import ControlSchedule, sample_intervals
-from ..figures.geometry import distance_to_segment, segment_points
 from ..dynamics.model import SleighParams, momenta, velocities
 from ..dynamics.replayer import replay_chunk
 from ..dynamics.simulate import simulate
+from ..figures.geometry import distance_to_segment, segment_points
 from ..tracing.sections import FigureTrace
 
 __all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
