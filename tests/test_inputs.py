@@ -1,4 +1,4 @@
-"""Tests of skatetrace.drawings.inputs: SVG, point lists, parametric functions, lengths, and their errors."""
+"""Tests of skatetrace.drawings.svg: SVG, point lists, parametric functions, lengths, and their errors."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from svgpathtools import parse_path
 
 from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, SplinePiece, curvature
 from skatetrace.errors import DrawingError, SkatetraceError
-from skatetrace.drawings.inputs import (
+from skatetrace.drawings.svg import (
     CLOSE_TOL, from_function, load_drawing, parse_length, parse_path_string, read_points, read_svg,
 )
 
@@ -574,7 +574,7 @@ def test_load_drawing_dispatches_on_the_suffix(tmp_path):
 
 
 def test_old_svgpathtools_without_strict_mode(monkeypatch):
-    import skatetrace.drawings.inputs as inputs
+    import skatetrace.drawings.svg as inputs
 
     real = inputs.Document
 

@@ -20,7 +20,7 @@ _EXPORTS = {
     "figures.figure": ("Curve", "Figure", "Join", "figure_from_dict", "load_figure"),
     "drawings.fitting": ("DrawingFit", "PathFit", "figure_from_fit", "fit_drawing", "fit_path"),
     "figures.geometry": ("Pose", "Segment", "Spiral"),
-    "drawings.inputs": ("from_function", "load_drawing", "parse_length", "read_points", "read_svg"),
+    "drawings.svg": ("from_function", "load_drawing", "parse_length", "read_points", "read_svg"),
     "dynamics.model": ("SleighParams",),
     "figures.patterns": ("pattern", "pattern_names"),
     "dynamics.presets": ("PAPER_PARAMS", "skater_params"),
