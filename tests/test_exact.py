@@ -15,7 +15,7 @@ from skatetrace.drawings.exact import (ExactDrawingFit, ExactPathFit, ExactStatu
                               fit_exact_path)
 from skatetrace.drawings.fitting import _split, corner_join, fit_path
 from skatetrace.figures.geometry import Pose, Segment, Spiral, distance_to_segment, end_pose, segment_points
-from skatetrace.drawings.svg import read_points
+from skatetrace.drawings.points import read_points
 
 
 def ellipse_quarter():

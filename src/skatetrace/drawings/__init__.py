@@ -1,6 +1,8 @@
 """Drawings: a user's curve (SVG, points, a function) turned into a traceable figure.
 
-Reading drawings into parametric paths (:mod:`.curves`, :mod:`.svg`), fitting them by arcs and
+Reading drawings into parametric paths (:mod:`.curves`): SVG (:mod:`.svg`), point lists
+(:mod:`.points`), Python functions (:mod:`.functions`), any file by its suffix (:mod:`.load`), with
+lengths, units and size limits in :mod:`.lengths` and file reading in :mod:`.files`. Fitting them by arcs and
 lines within a certified distance (:mod:`.fitting`) or by exact curvature splines (:mod:`.exact`),
 and resolving whatever the user names into a figure (:mod:`.sources`).
 """

@@ -102,7 +102,7 @@ def _size(size) -> tuple[float | None, str | None]:
             raise SkatetraceError(f"size must be a positive length, got {size!r}")
         value, unit = float(size), "model"
     else:
-        from .svg import parse_length
+        from .lengths import parse_length
 
         try:
             value, unit = parse_length(str(size))
@@ -124,7 +124,7 @@ def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL, floor: f
     if isinstance(tol, (int, float)) and not isinstance(tol, bool):
         value, tunit = float(tol), unit
     else:
-        from .svg import parse_length
+        from .lengths import parse_length
 
         try:
             value, tunit = parse_length(str(tol))
@@ -192,7 +192,7 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
     path = Path(name)
     suffix = path.suffix.lower()
     if suffix in DRAWING_SUFFIXES:
-        from .svg import load_drawing
+        from .load import load_drawing
 
         return _drawing(load_drawing(path), size, tol, method, body_mass, height, exact)
     if suffix == ".json" or path.exists():
