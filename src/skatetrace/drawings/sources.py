@@ -240,7 +240,8 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         fig = _merged(figure_from_fit(fit, name=drawing.name, params=params))
         return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v,
                         notes=tuple(notes))
-    from .exact import figure_from_exact, fit_exact_drawing
+    from .exact import fit_exact_drawing
+    from .exact_figure import figure_from_exact
 
     exact_v = _tol(None if exact is True else exact, unit, fsize, DEFAULT_EXACT_REL_TOL)
     # A join whose tangent turns by delta displaces the rest of the path by about delta times its
