@@ -8,14 +8,15 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from skatetrace.drawings import exact
+from skatetrace.drawings import exact_runs
 from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, Path, curvature
 from skatetrace.errors import FitError
-from skatetrace.drawings.exact import (ExactDrawingFit, ExactPathFit, ExactStatus, figure_from_exact, fit_exact_drawing,
-                              fit_exact_path)
+from skatetrace.drawings.exact import fit_exact_drawing, fit_exact_path
+from skatetrace.drawings.exact_figure import figure_from_exact
+from skatetrace.drawings.exact_results import ExactDrawingFit, ExactPathFit, ExactStatus
 from skatetrace.drawings.fitting import _split, corner_join, fit_path
 from skatetrace.figures.geometry import Pose, Segment, Spiral, distance_to_segment, end_pose, segment_points
-from skatetrace.drawings.inputs import read_points
+from skatetrace.drawings.points import read_points
 
 
 def ellipse_quarter():
@@ -211,7 +212,7 @@ def test_deviation_falls_like_h4_on_a_smooth_spiral_span():
     path = bezier_spiral()
     [run], _ = _split(path, 0.5)
     assert len(run.spans) == 1 and run.spans[0].kind == "spiral"
-    geom = exact._RunGeom(path.pieces, run, "test")
+    geom = exact_runs.RunGeom(path.pieces, run, "test")
     x, y = path.pieces[0].point(0.0)[:, 0]
     start = Pose(float(x), float(y), run.spans[0].heading0)
     devs = [geom.evaluate(start, [n]).deviation for n in (16, 32, 64)]

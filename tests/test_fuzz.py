@@ -320,7 +320,7 @@ def _check_drawing(read, source):
 @FUZZ
 @given(path_data())
 def test_fuzz_path_data(d):
-    from skatetrace.drawings.inputs import parse_path_string
+    from skatetrace.drawings.svg import parse_path_string
 
     _check_drawing(parse_path_string, d)
     _check_drawing(st.read_svg, f'<svg xmlns="http://www.w3.org/2000/svg"><path d="{d}"/></svg>')
@@ -359,7 +359,7 @@ def test_fuzz_lengths(text):
     ("svg", "a\x00b", r"no file name"),
 ])
 def test_drawing_errors(read, source, match):
-    from skatetrace.drawings.inputs import parse_path_string
+    from skatetrace.drawings.svg import parse_path_string
 
     fn = {"path": parse_path_string, "svg": st.read_svg, "length": st.parse_length, "points": st.read_points}[read]
     with pytest.raises(DrawingError, match=match):

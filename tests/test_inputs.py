@@ -1,4 +1,4 @@
-"""Tests of skatetrace.drawings.inputs: SVG, point lists, parametric functions, lengths, and their errors."""
+"""Tests of reading drawings (skatetrace.drawings.svg, .points, .functions, .lengths, .load) and their errors."""
 
 from __future__ import annotations
 
@@ -14,9 +14,11 @@ from svgpathtools import parse_path
 
 from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, SplinePiece, curvature
 from skatetrace.errors import DrawingError, SkatetraceError
-from skatetrace.drawings.inputs import (
-    CLOSE_TOL, from_function, load_drawing, parse_length, parse_path_string, read_points, read_svg,
-)
+from skatetrace.drawings.functions import from_function
+from skatetrace.drawings.lengths import CLOSE_TOL, parse_length
+from skatetrace.drawings.load import load_drawing
+from skatetrace.drawings.points import read_points
+from skatetrace.drawings.svg import parse_path_string, read_svg
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
 T = np.linspace(0.0, 1.0, 41)
@@ -574,17 +576,20 @@ def test_load_drawing_dispatches_on_the_suffix(tmp_path):
 
 
 def test_old_svgpathtools_without_strict_mode(monkeypatch):
-    import skatetrace.drawings.inputs as inputs
+    import skatetrace.drawings.svg as svg_module
 
-    real = inputs.Document
+    real = svg_module.Document
+    calls = []
 
     def old_document(stream, **kwargs):
+        calls.append(sorted(kwargs))
         if kwargs:
             raise TypeError("__init__() got an unexpected keyword argument 'strict_transform_parsing'")
         return real(stream)
 
-    monkeypatch.setattr(inputs, "Document", old_document)
+    monkeypatch.setattr(svg_module, "Document", old_document)
     assert read_svg(svg('<path d="M 0 0 L 1 0"/>')).paths[0].length() == pytest.approx(1.0)
+    assert calls == [["strict_transform_parsing"], []]  # the patch took effect: strict mode, then the fallback
 
 
 # --------------------------------------------------------------------------------------------------

@@ -464,7 +464,7 @@ def _check_values(args) -> None:
         positive("--" + name.replace("_", "-"), getattr(args, name), upper)
     lengths = [("--size", args.size), ("--tol", args.tol), ("--exact", None if args.exact is True else args.exact)]
     if any(value is not None for _, value in lengths):  # checked for every figure, not only drawings
-        from ..drawings.inputs import parse_length
+        from ..drawings.lengths import parse_length
 
         for name, value in lengths:
             try:

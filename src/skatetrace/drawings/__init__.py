@@ -1,6 +1,9 @@
 """Drawings: a user's curve (SVG, points, a function) turned into a traceable figure.
 
-Reading drawings into parametric paths (:mod:`.curves`, :mod:`.inputs`), fitting them by arcs and
-lines within a certified distance (:mod:`.fitting`) or by exact curvature splines (:mod:`.exact`),
-and resolving whatever the user names into a figure (:mod:`.sources`).
+Reading drawings into parametric paths (:mod:`.curves`): SVG (:mod:`.svg`), point lists
+(:mod:`.points`), Python functions (:mod:`.functions`), any file by its suffix (:mod:`.load`), with
+lengths, units and size limits in :mod:`.lengths` and file reading in :mod:`.files`. Fitting them by arcs and
+lines within a certified distance (:mod:`.fitting`) or by exact curvature splines (:mod:`.exact`: one
+span in :mod:`.exact_spans`, one run in :mod:`.exact_runs`, results in :mod:`.exact_results`, the
+figure in :mod:`.exact_figure`), and resolving whatever the user names into a figure (:mod:`.sources`).
 """

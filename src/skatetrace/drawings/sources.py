@@ -102,7 +102,7 @@ def _size(size) -> tuple[float | None, str | None]:
             raise SkatetraceError(f"size must be a positive length, got {size!r}")
         value, unit = float(size), "model"
     else:
-        from .inputs import parse_length
+        from .lengths import parse_length
 
         try:
             value, unit = parse_length(str(size))
@@ -124,7 +124,7 @@ def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL, floor: f
     if isinstance(tol, (int, float)) and not isinstance(tol, bool):
         value, tunit = float(tol), unit
     else:
-        from .inputs import parse_length
+        from .lengths import parse_length
 
         try:
             value, tunit = parse_length(str(tol))
@@ -192,7 +192,7 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
     path = Path(name)
     suffix = path.suffix.lower()
     if suffix in DRAWING_SUFFIXES:
-        from .inputs import load_drawing
+        from .load import load_drawing
 
         return _drawing(load_drawing(path), size, tol, method, body_mass, height, exact)
     if suffix == ".json" or path.exists():
@@ -240,7 +240,8 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         fig = _merged(figure_from_fit(fit, name=drawing.name, params=params))
         return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v,
                         notes=tuple(notes))
-    from .exact import figure_from_exact, fit_exact_drawing
+    from .exact import fit_exact_drawing
+    from .exact_figure import figure_from_exact
 
     exact_v = _tol(None if exact is True else exact, unit, fsize, DEFAULT_EXACT_REL_TOL)
     # A join whose tangent turns by delta displaces the rest of the path by about delta times its
