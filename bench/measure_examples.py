@@ -1,16 +1,16 @@
-"""Measure the README's examples as a user runs them, and write the README's table from the numbers.
+"""Measure the documented examples as a user runs them, and write the user guide's table from the numbers.
 
-The README's figures for the examples (time, deviation, both verdicts) come from this script, never by
+The guide's figures for the examples (time, deviation, both verdicts) come from this script, never by
 hand: it runs each command below from a cold start in a subprocess, reads the files it wrote, stores
 the measurements in ``bench/examples.json`` (with the machine, versions and date), and rewrites the
-block of README.md between ``<!-- examples:begin -->`` and ``<!-- examples:end -->``. A test holds
-the README's block to ``render(bench/examples.json)``.
+block of docs/guide/examples.md between ``<!-- examples:begin -->`` and ``<!-- examples:end -->``. A
+test holds that block to ``render(bench/examples.json)``.
 
 Usage::
 
     python bench/measure_examples.py            # all examples (a few minutes on 2 cores)
     python bench/measure_examples.py --only double-flower,school-three
-    python bench/measure_examples.py --render   # only rewrite README.md from bench/examples.json
+    python bench/measure_examples.py --render   # no measuring: rewrite the table from bench/examples.json
 
 Deviations are shown as bounds rounded up to one significant digit: their last digits are round-off
 and differ between machines (Intel and AMD); times to two significant digits, from one cold run.
@@ -32,6 +32,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "bench" / "examples.json"
+#: The page whose table this script writes, between the markers below.
+PAGE = ROOT / "docs" / "guide" / "examples.md"
 BEGIN, END = "<!-- examples:begin -->", "<!-- examples:end -->"
 
 #: name -> (arguments of ``skatetrace trace`` after the figure, what it is)
@@ -100,7 +102,7 @@ def measure(name: str) -> dict:
 
 
 def render(data: dict) -> str:
-    """The README block (without the markers) for the measurements ``data``."""
+    """The page's table block (without the markers) for the measurements ``data``."""
     lines = [f"Measured by `python bench/measure_examples.py` on {data['date']} ({data['machine']}; one cold run "
              "each, plots and viewer included; deviations rounded up to one digit, as bounds):", "",
              "| command | exit | time | sections | replay deviation (tolerance) | drawing fit | mass reach (limit) "
@@ -122,19 +124,28 @@ def render(data: dict) -> str:
     return "\n".join(lines)
 
 
-def write_readme(data: dict, readme: Path = ROOT / "README.md") -> None:
-    text = readme.read_text(encoding="utf-8")
+def write_table(data: dict, page: Path = PAGE) -> None:
+    """Rewrite the block between ``BEGIN`` and ``END`` of ``page`` with ``render(data)``."""
+    text = page.read_text(encoding="utf-8")
+    if BEGIN not in text or END not in text:
+        raise SystemExit(f"{page}: the markers {BEGIN} and {END} are missing; put them where the table goes")
     i, j = text.index(BEGIN) + len(BEGIN), text.index(END)
-    readme.write_text(text[:i] + "\n" + render(data) + "\n" + text[j:], encoding="utf-8")
+    page.write_text(text[:i] + "\n" + render(data) + "\n" + text[j:], encoding="utf-8")
+
+
+def render_only(data_path: Path = DATA, page: Path = PAGE) -> None:
+    """Rewrite the page's table from the stored measurements, measuring nothing."""
+    write_table(json.loads(data_path.read_text(encoding="utf-8")), page)
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--only", help="comma-separated subset of: " + ", ".join(EXAMPLES))
-    p.add_argument("--render", action="store_true", help="only rewrite README.md from bench/examples.json")
+    p.add_argument("--render", action="store_true",
+                   help="measure nothing: only rewrite docs/guide/examples.md's table from bench/examples.json")
     args = p.parse_args(argv)
     if args.render:
-        write_readme(json.loads(DATA.read_text()))
+        render_only()
         return 0
     names = list(EXAMPLES) if not args.only else [n.strip() for n in args.only.split(",")]
     unknown = [n for n in names if n not in EXAMPLES]
@@ -155,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
     data = {"date": _dt.date.today().isoformat(), "machine": f"{os.cpu_count()} cores, {cpu}",
             "python": platform.python_version(), "rows": [rows[n] for n in EXAMPLES if n in rows]}
     DATA.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
-    write_readme(data)
+    write_table(data)
     return 0
 
 
