@@ -110,9 +110,9 @@ def _resolves(dotted: str) -> bool:
 
 
 def test_the_modules_and_functions_named_exist():
-    # The guide names today's modules (e.g. skatetrace.pipeline, skatetrace.outputs.io), not old ones.
+    # The guide names today's modules (e.g. skatetrace.pipeline, skatetrace.outputs.results), not old ones.
     named = {name: page for page, text in [*PAGES.items(), ("README.md", README)] for name in _named_objects(text)}
-    assert "skatetrace.outputs.io.load_result" in named
+    assert "skatetrace.outputs.results.load_result" in named
     missing = sorted(f"{name} (in {page})" for name, page in named.items() if not _resolves(name))
     assert not missing, f"named but not importable: {missing}"
     assert not _resolves("skatetrace.rests"), "the check must tell a moved module (skatetrace.rests) from a current one"

@@ -8,7 +8,7 @@ A :class:`Curve` is one stroke on the ice. Consecutive pieces meet at a :class:`
 
 A curve may be repeated ``repeat`` times, copy ``k`` being the unit carried on by the same rigid
 motion; ``closing`` is the join between copies and back to the start. A :class:`Figure` is a
-collection of curves. The JSON form is documented in the README (schema ``skatetrace.figure/1``).
+collection of curves. The JSON form is documented in the user guide, ``docs/guide/figure-format.md`` (schema ``skatetrace.figure/1``).
 """
 
 from __future__ import annotations
