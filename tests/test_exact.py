@@ -13,7 +13,9 @@ from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, F
 from skatetrace.errors import FitError
 from skatetrace.drawings.exact import (ExactDrawingFit, ExactPathFit, ExactStatus, figure_from_exact, fit_exact_drawing,
                               fit_exact_path)
-from skatetrace.drawings.fitting import _split, corner_join, fit_path
+from skatetrace.drawings.corners import corner_join
+from skatetrace.drawings.fitting import fit_path
+from skatetrace.drawings.splitting import _split
 from skatetrace.figures.geometry import Pose, Segment, Spiral, distance_to_segment, end_pose, segment_points
 from skatetrace.drawings.inputs import read_points
 

@@ -11,11 +11,15 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from skatetrace.drawings import fitting
-from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, Path, piece_length
+from skatetrace.drawings import arc_distances, biarcs, fitting
+from skatetrace.drawings.biarcs import biarc
+from skatetrace.drawings.curves import (BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, Path,
+                                        piece_length)
 from skatetrace.errors import FitError, SkatetraceError
-from skatetrace.drawings.fitting import (DrawingFit, FitStatus, PathFit, biarc, figure_from_fit, fit_drawing, fit_path,
-                                split_path)
+from skatetrace.drawings.fit_results import DrawingFit, FitStatus, PathFit
+from skatetrace.drawings.fitting import fit_drawing, fit_path
+from skatetrace.drawings.splitting import split_path
+from skatetrace.drawings.to_figure import figure_from_fit
 from skatetrace.figures.geometry import Pose, Segment, advance, distance_to_segment
 
 BENCH = FsPath(__file__).resolve().parents[1] / "bench"
@@ -229,7 +233,7 @@ def test_biarc_errors_and_order_three():
         a, b = (Pose(p[0, i], p[1, i], math.atan2(d[1, i], d[0, i])) for i in (0, 1))
         segs = biarc(a, b)
         pts = piece.point(np.linspace(0.0, h, 2001))
-        poses = fitting._chain_poses(a, segs)
+        poses = biarcs._chain_poses(a, segs)
         errs.append(float(np.max(np.min([distance_to_segment(pts, q, s) for q, s in zip(poses, segs)], axis=0))))
     slopes = np.diff(np.log(errs)) / np.diff(np.log(hs))
     assert np.all((slopes > 2.8) & (slopes < 3.4)) and abs(slopes[-1] - 3) < 0.1, slopes
@@ -241,10 +245,10 @@ def test_robust_segment_distance():
     pose = Pose(0.1, -0.2, 0.7)
     for k in (0.0, 1.0, -2.0, 0.3, 5.0):
         seg = Segment(k, 2.5)
-        assert np.allclose(fitting._seg_dist(pts, pose, k, 2.5), distance_to_segment(pts, pose, seg), atol=1e-12)
+        assert np.allclose(arc_distances._seg_dist(pts, pose, k, 2.5), distance_to_segment(pts, pose, seg), atol=1e-12)
     # For a radius of 1e14 the centre-based formula loses every digit; ours matches the line's.
-    far = fitting._seg_dist(pts, pose, 1e-14, 2.5)
-    assert np.allclose(far, fitting._seg_dist(pts, pose, 0.0, 2.5), atol=1e-12)
+    far = arc_distances._seg_dist(pts, pose, 1e-14, 2.5)
+    assert np.allclose(far, arc_distances._seg_dist(pts, pose, 0.0, 2.5), atol=1e-12)
 
 
 # ---------------------------------------------------------------- certified fits

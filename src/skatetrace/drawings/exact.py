@@ -57,11 +57,14 @@ from typing import NamedTuple, Sequence
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .curves import AffinePiece, Drawing, Path, Piece, SplinePiece, curvature
+from .corners import _wrap, corner_join
+from .curves import AffinePiece, Drawing, Path, Piece, SplinePiece, _gl_lengths, _noisy, curvature
 from ..errors import FitError
 from ..figures.figure import Figure, Join
-from .fitting import (Run, Span, _check_reverse, _check_tol, _direction, _figure_curves, _gl_lengths, _noisy, _split,
-                      _wrap, corner_join)
+from .fitting import _check_tol
+from .spirals import Span
+from .splitting import Run, _direction, _split
+from .to_figure import _check_reverse, _figure_curves
 from ..figures.geometry import Pose, Segment, Spiral, end_pose, shifted_polynomial, travel
 
 __all__ = [
