@@ -25,9 +25,10 @@ def _wrap(a: float) -> float:
 def corner_join(corner: float | None, reverse_above_deg: float = 90.0) -> Join | None:
     """The figure join for a run's ``corner``; ``None`` if there is none.
 
-    ``corner`` is as :attr:`~skatetrace.drawings.splitting.Run.corner`. ``0.0`` is a smooth join. Otherwise a cusp join: if ``|corner|`` exceeds ``reverse_above_deg``
-    the blade reverses (a true cusp) and pivots by ``remainder(corner - pi, 2 pi)``, else it pivots
-    by ``corner``; either way the travel direction after the join has turned by ``corner``.
+    ``corner`` is as :attr:`~skatetrace.drawings.splitting.Run.corner`. ``0.0`` is a smooth join.
+    Otherwise a cusp join: if ``|corner|`` exceeds ``reverse_above_deg`` the blade reverses (a true
+    cusp) and pivots by ``remainder(corner - pi, 2 pi)``, else it pivots by ``corner``; either way the
+    travel direction after the join has turned by ``corner``.
 
     Examples
     --------
