@@ -40,7 +40,6 @@ class Span(NamedTuple):
     reason: str
 
 
-
 def _sign_changes(x: np.ndarray, v: np.ndarray, eps: float) -> list[tuple[float, float]]:
     """Brackets ``(lo, hi)`` where ``v`` changes sign; values within ``eps`` of zero count as zero."""
     s = np.where(np.abs(v) <= eps, 0, np.sign(v))
