@@ -11,10 +11,12 @@ from scipy.spatial import cKDTree
 from skatetrace.drawings import exact_runs
 from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, Path, curvature
 from skatetrace.errors import FitError
+from skatetrace.drawings.corners import corner_join
 from skatetrace.drawings.exact import fit_exact_drawing, fit_exact_path
 from skatetrace.drawings.exact_figure import figure_from_exact
 from skatetrace.drawings.exact_results import ExactDrawingFit, ExactPathFit, ExactStatus
-from skatetrace.drawings.fitting import _split, corner_join, fit_path
+from skatetrace.drawings.fitting import fit_path
+from skatetrace.drawings.splitting import _split
 from skatetrace.figures.geometry import Pose, Segment, Spiral, distance_to_segment, end_pose, segment_points
 from skatetrace.drawings.points import read_points
 

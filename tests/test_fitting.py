@@ -1,4 +1,8 @@
-"""Arc-spline fitting: splitting, biarcs, certified Hausdorff bounds, greedy vs minimum count, figures."""
+"""Arc-spline fitting: exact cases, certified Hausdorff bounds, greedy vs minimum count, failures as data.
+
+Splitting, biarcs, distances and figures have their own tests (test_splitting, test_biarcs,
+test_arc_distances, test_to_figure).
+"""
 
 import importlib.util
 import math
@@ -11,44 +15,21 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
+from fitting_cases import bezier_spiral, ellipse_quarter, heading_gap, sine_piece, size_of
 from skatetrace.drawings import fitting
-from skatetrace.drawings.curves import BezierPiece, Drawing, EllipticArcPiece, FunctionPiece, LinePiece, Path, piece_length
+from skatetrace.drawings.curves import BezierPiece, EllipticArcPiece, FunctionPiece, LinePiece, Path, piece_length
 from skatetrace.errors import FitError, SkatetraceError
-from skatetrace.drawings.fitting import (DrawingFit, FitStatus, PathFit, biarc, figure_from_fit, fit_drawing, fit_path,
-                                split_path)
-from skatetrace.figures.geometry import Pose, Segment, advance, distance_to_segment
+from skatetrace.drawings.fit_results import FitStatus, PathFit
+from skatetrace.drawings.fitting import fit_path
+from skatetrace.drawings.to_figure import figure_from_fit
+from skatetrace.figures.geometry import advance, distance_to_segment
 
 BENCH = FsPath(__file__).resolve().parents[1] / "bench"
 TOLS = (1e-2, 1e-3, 1e-4)
 
 
-def sine_piece(analytic=True):
-    if analytic:
-        return FunctionPiece(lambda u: (u, np.sin(u)), 0.0, 2 * math.pi, lambda u: (np.ones_like(u), np.cos(u)),
-                             lambda u: (np.zeros_like(u), -np.sin(u)))
-    return FunctionPiece(lambda u: (u, np.sin(u)), 0.0, 2 * math.pi)
-
-
-def ellipse_quarter():
-    return Path((EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.0, math.pi / 2),), name="ellipse-quarter")
-
-
-def bezier_spiral():
-    # Curvature of one sign, monotone on [0, 1] (checked in test_reference_spirals_are_single_spans).
-    return Path((BezierPiece(((0.0, 0.0), (1.0, 0.0), (2.0, 0.2), (2.8, 0.8))),), name="bezier-spiral")
-
-
-def size_of(path):
-    pts = path.points(513)
-    return float(max(np.ptp(pts[0]), np.ptp(pts[1])))
-
-
 def all_segments(fit):
     return [(p, s) for r in fit.runs for p, s in zip(r.poses()[:-1], r.segments)]
-
-
-def heading_gap(a, b):
-    return abs(math.remainder(a - b, 2 * math.pi))
 
 
 def quiet_fit(path, tol, **kw):
@@ -117,134 +98,6 @@ def test_huge_radius_becomes_a_line():
     fit = fit_path(path, 1e-4)
     assert fit.success and (fit.n_arcs, fit.n_lines) == (0, 1)
     assert fit.hausdorff <= 1e-4
-
-
-# ---------------------------------------------------------------- splitting
-
-
-def test_sine_inflection_and_extrema():
-    for analytic in (True, False):
-        [run] = split_path(Path((sine_piece(analytic),)))
-        u = [s.t0 * 2 * math.pi for s in run.spans[1:]]
-        reasons = [s.reason for s in run.spans]
-        assert reasons == ["start", "extremum", "inflection", "extremum"]
-        assert u == pytest.approx([math.pi / 2, math.pi, 3 * math.pi / 2], abs=1e-8 if analytic else 1e-4)
-        assert [s.kind for s in run.spans] == ["spiral"] * 4
-
-
-def test_reference_spirals_are_single_spans():
-    for path in (ellipse_quarter(), bezier_spiral()):
-        [run] = split_path(path)
-        assert len(run.spans) == 1 and run.spans[0].kind == "spiral" and run.corner is None
-
-
-@pytest.mark.parametrize("p1, angle", [((1.0, 1.0), 90.0), ((1.0, -1.0), -90.0), ((2.0, 1.0), 45.0),
-                                       ((0.0, 1.0), 135.0),
-                                       ((0.0, -0.001), -180.0 + math.degrees(math.atan(0.001)))])
-def test_corner_signed_angle(p1, angle):
-    path = Path((LinePiece((0.0, 0.0), (1.0, 0.0)), LinePiece((1.0, 0.0), p1)))
-    runs = split_path(path)
-    assert [r.corner for r in runs][0] is None
-    assert math.degrees(runs[1].corner) == pytest.approx(angle, abs=1e-6)
-    assert runs[1].spans[0].reason == "corner"
-
-
-def test_cusps_inside_pieces():
-    # A cubic cusp: control polygon crossing itself symmetrically; and an out-and-back quadratic.
-    for piece, n_cusp in [(BezierPiece(((0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0))), 1),
-                          (BezierPiece(((0.0, 0.0), (1.0, 0.0), (0.5, 0.0))), 1)]:
-        runs = split_path(Path((piece,)))
-        assert len(runs) == 1 + n_cusp
-        for r in runs[1:]:
-            assert abs(r.corner) == pytest.approx(math.pi, abs=1e-6)
-            assert r.spans[0].reason == "cusp"
-    # An astroid has four cusps, all true reversals.
-    astroid = Path((FunctionPiece(lambda u: (np.cos(u) ** 3, np.sin(u) ** 3), 0.0, 2 * math.pi),), closed=True)
-    runs = split_path(astroid)
-    assert len(runs) == 4 and all(abs(r.corner) == pytest.approx(math.pi, abs=1e-3) for r in runs)
-
-
-def test_zero_length_handle_joins_smoothly():
-    # The second piece starts with a zero-length handle; its limit tangent continues the first piece.
-    a = BezierPiece(((0.0, 0.0), (1.0, 0.0), (2.0, 1.0), (3.0, 1.0)))
-    b = BezierPiece(((3.0, 1.0), (3.0, 1.0), (4.0, 1.0), (5.0, 0.0)))
-    runs = split_path(Path((a, b)))
-    assert len(runs) == 1
-    assert "join" in [s.reason for s in runs[0].spans]
-    # ... and a small real corner is still a corner.
-    c = BezierPiece(((3.0, 1.0), (3.0, 1.0), (4.0, 1.1), (5.0, 0.0)))
-    runs = split_path(Path((a, c)))
-    assert len(runs) == 2 and math.degrees(runs[1].corner) == pytest.approx(math.degrees(math.atan2(0.1, 1.0)))
-
-
-def test_closed_path_closure():
-    teardrop = Path((BezierPiece(((0.0, 0.0), (2.0, 1.0), (-1.0, 1.0), (0.0, 0.0))),), closed=True)
-    [run] = split_path(teardrop)
-    # leaves along (2, 1), arrives along (1, -1): the travel direction turns left by their difference
-    assert run.corner == pytest.approx(math.atan2(1.0, 2.0) - math.atan2(-1.0, 1.0))
-    ellipse = Path((EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.0, 2 * math.pi),), closed=True)
-    runs = split_path(ellipse)
-    assert len(runs) == 1 and runs[0].corner == 0.0
-    # A closed path with corners elsewhere and a smooth closure: the closure lies inside a run.
-    a = EllipticArcPiece((1.0, 0.0), 1.0, 1.0, 0.0, -math.pi / 2, math.pi)  # right end of a stadium
-    b = LinePiece((1.0, 1.0), (-1.0, 1.0))
-    c = LinePiece((-1.0, 1.0), (-1.0, -1.0))  # corners of +90 degrees at both its ends
-    d = LinePiece((-1.0, -1.0), (1.0, -1.0))  # ... and the path closes smoothly into the arc
-    runs = split_path(Path((a, b, c, d), closed=True))
-    assert [[s.piece for s in r.spans] for r in runs] == [[2], [3, 0, 1]]
-    assert [r.corner for r in runs] == pytest.approx([math.pi / 2, math.pi / 2])
-    assert [s.kind for s in runs[1].spans] == ["line", "arc", "line"]
-
-
-# ---------------------------------------------------------------- biarcs
-
-
-@settings(max_examples=200, deadline=None)
-@given(st.lists(st.floats(-3, 3), min_size=6, max_size=6))
-def test_biarc_interpolates_hermite_data(v):
-    start, end = Pose(v[0], v[1], v[2]), Pose(v[3], v[4], v[5])
-    assume(math.hypot(v[3] - v[0], v[4] - v[1]) > 1e-3)
-    try:
-        segs = biarc(start, end)
-    except FitError:
-        return  # both directions back along the chord: no bounded biarc
-    assert 1 <= len(segs) <= 2 and all(s.length > 0 for s in segs)
-    pose = start
-    for k, L in segs:
-        pose = Pose(*(float(x) for x in advance(pose, k, L)))
-    assert math.hypot(pose.x - end.x, pose.y - end.y) <= 1e-9 * (1 + sum(s.length for s in segs))
-    assert heading_gap(pose.heading, end.heading) <= 1e-9
-
-
-def test_biarc_errors_and_order_three():
-    with pytest.raises(FitError, match="coincide"):
-        biarc(Pose(1.0, 1.0, 0.0), Pose(1.0, 1.0, 1.0))
-    # Meek & Walton: the biarc error on a span of length h of a smooth curve is O(h^3).
-    piece = EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.3, 1.0)
-    errs = []
-    hs = [0.2, 0.1, 0.05, 0.025]
-    for h in hs:
-        t = np.array([0.0, h])
-        p, d = piece.point(t), piece.d1(t)
-        a, b = (Pose(p[0, i], p[1, i], math.atan2(d[1, i], d[0, i])) for i in (0, 1))
-        segs = biarc(a, b)
-        pts = piece.point(np.linspace(0.0, h, 2001))
-        poses = fitting._chain_poses(a, segs)
-        errs.append(float(np.max(np.min([distance_to_segment(pts, q, s) for q, s in zip(poses, segs)], axis=0))))
-    slopes = np.diff(np.log(errs)) / np.diff(np.log(hs))
-    assert np.all((slopes > 2.8) & (slopes < 3.4)) and abs(slopes[-1] - 3) < 0.1, slopes
-
-
-def test_robust_segment_distance():
-    rng = np.random.default_rng(7)
-    pts = rng.normal(size=(2, 500))
-    pose = Pose(0.1, -0.2, 0.7)
-    for k in (0.0, 1.0, -2.0, 0.3, 5.0):
-        seg = Segment(k, 2.5)
-        assert np.allclose(fitting._seg_dist(pts, pose, k, 2.5), distance_to_segment(pts, pose, seg), atol=1e-12)
-    # For a radius of 1e14 the centre-based formula loses every digit; ours matches the line's.
-    far = fitting._seg_dist(pts, pose, 1e-14, 2.5)
-    assert np.allclose(far, fitting._seg_dist(pts, pose, 0.0, 2.5), atol=1e-12)
 
 
 # ---------------------------------------------------------------- certified fits
@@ -325,73 +178,6 @@ def test_certificate_is_honest(make, method):
     assert fit.where is not None and fit.where.distance == fit.hausdorff_sampled
     piece = path.pieces[fit.where.piece]
     assert np.allclose(piece.point(fit.where.t)[:, 0], (fit.where.x, fit.where.y))
-
-
-# ---------------------------------------------------------------- figures
-
-
-def figure_path():
-    """Open path: a smooth join, corners of +45 and -45 degrees, then a true cusp inside a piece."""
-    return Path((
-        BezierPiece(((0.0, 0.0), (1.0, 0.0), (2.0, 1.0), (3.0, 1.0))),
-        BezierPiece(((3.0, 1.0), (4.0, 1.0), (4.0, 2.0), (3.5, 2.5))),  # smooth continuation
-        LinePiece((3.5, 2.5), (2.5, 2.5)),  # corner of +45 degrees
-        BezierPiece(((2.5, 2.5), (1.5, 3.5), (2.5, 3.5), (1.5, 2.5))),  # -45 degrees, then a cusp
-    ), name="mixed")
-
-
-def test_figure_path_has_what_it_says():
-    runs = split_path(figure_path())
-    assert [round(math.degrees(r.corner), 6) if r.corner is not None else None for r in runs] == [
-        None, 45.0, -45.0, 180.0]
-    assert [r.spans[0].reason for r in runs] == ["start", "corner", "corner", "cusp"]
-
-
-@pytest.mark.parametrize("path", [
-    figure_path(),
-    Path((BezierPiece(((0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0))),
-          BezierPiece(((1.0, 0.0), (2.0, -1.0), (1.0, -1.0), (0.0, 0.0)))), closed=True, name="closed-cusps"),
-    Path((EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.4, 0.0, 2 * math.pi),), closed=True, name="ellipse"),
-])
-def test_figure_layout_reproduces_fit(path):
-    fit = fit_path(path, 1e-3 * size_of(path))
-    fig = figure_from_fit(fit, name="fitted")
-    [curve] = fig.curves
-    size = size_of(path)
-    poses = [q for r in fit.runs for q in r.poses()[:-1]]
-    placed = curve.layout()
-    assert len(placed) == len(poses) == fit.n_segments
-    for pl, q, (seg) in zip(placed, poses, [s for r in fit.runs for s in r.segments]):
-        assert pl.segment == seg
-        assert math.hypot(pl.start.x - q.x, pl.start.y - q.y) <= 1e-9 * size
-        assert heading_gap(pl.start.heading, q.heading) <= 1e-9
-    end, _ = curve.end_pose()
-    last = fit.runs[-1].poses()[-1]
-    if not path.closed:
-        assert math.hypot(end.x - last.x, end.y - last.y) <= 1e-9 * size
-    else:
-        assert curve.closure()["position_gap"] <= 1e-9 * size
-        assert curve.closure()["closed"] or abs(curve.closure()["heading_gap"]) <= 1e-9
-    # joins: smooth inside runs, one cusp per corner; reversal above 90 degrees only
-    cusps = [j for j in curve.joins if j.is_cusp]
-    assert len(cusps) == len(fit.runs) - 1
-    for run, j in zip(fit.runs[1:], cusps):
-        assert j.reverse == (abs(run.corner) > math.pi / 2)
-        turn = j.pivot + (math.pi if j.reverse else 0.0)
-        assert heading_gap(turn, run.corner) <= 1e-12
-    assert fig.provenance.startswith("arc-spline fit")
-
-
-def test_figure_from_drawing_and_reverse_threshold():
-    vee = Path((LinePiece((0.0, 0.0), (1.0, 0.0)), LinePiece((1.0, 0.0), (0.0, 0.5))), name="vee")
-    ell = Path((EllipticArcPiece((5.0, 0.0), 2.0, 1.0, 0.0, 0.0, math.pi),), name="arc")
-    dfit = fit_drawing(Drawing((vee, ell)), 1e-3)
-    assert isinstance(dfit, DrawingFit) and dfit.success and len(dfit.paths) == 2
-    assert dfit.n_arcs == sum(p.n_arcs for p in dfit.paths) and dfit.hausdorff <= 1e-3
-    fig = figure_from_fit(dfit, name="two", reverse_above_deg=170.0)
-    assert [c.name for c in fig.curves] == ["vee", "arc"]
-    j = fig.curves[0].joins[0]
-    assert not j.reverse and math.degrees(j.pivot) == pytest.approx(180 - math.degrees(math.atan2(0.5, 1.0)))
 
 
 # ---------------------------------------------------------------- errors and robustness

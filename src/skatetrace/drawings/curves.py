@@ -18,6 +18,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+_GL5 = np.polynomial.legendre.leggauss(5)
+
 __all__ = [
     "Piece", "LinePiece", "BezierPiece", "EllipticArcPiece", "FunctionPiece", "SplinePiece", "AffinePiece",
     "Path", "Drawing", "curvature", "piece_length",
@@ -236,6 +238,30 @@ def piece_length(piece: Piece, t0: float = 0.0, t1: float = 1.0, n: int = 64) ->
     t = 0.5 * (t1 - t0) * x + 0.5 * (t1 + t0)
     d = piece.d1(t)
     return float(0.5 * (t1 - t0) * np.sum(w * np.hypot(d[0], d[1])))
+
+
+def _gl_lengths(piece: Piece, ta: np.ndarray, tb: np.ndarray) -> np.ndarray:
+    """Arc length of each interval ``[ta, tb]`` by 5-point Gauss-Legendre."""
+    x, w = _GL5
+    mid, half = 0.5 * (ta + tb), 0.5 * (tb - ta)
+    tt = (mid[:, None] + half[:, None] * x[None, :]).ravel()
+    d = piece.d1(tt)
+    sp = np.hypot(d[0], d[1]).reshape(-1, x.size)
+    return np.abs(half) * (sp @ w)
+
+
+def _col(piece: Piece, fn: str, t: float) -> np.ndarray:
+    """``piece.point``, ``d1`` or ``d2`` (named by ``fn``) at one parameter ``t``, shape ``(2,)``."""
+    return np.asarray(getattr(piece, fn)(float(t)), dtype=float)[:, 0]
+
+
+def _noisy(piece: Piece) -> bool:
+    """Whether a piece's second derivative is a finite difference (curvature then has ~1e-8 noise)."""
+    if isinstance(piece, AffinePiece):
+        return _noisy(piece.base)
+    if isinstance(piece, FunctionPiece):
+        return piece.d2fn is None
+    return not isinstance(piece, (LinePiece, BezierPiece, EllipticArcPiece, SplinePiece))
 
 
 @dataclass(frozen=True, slots=True)

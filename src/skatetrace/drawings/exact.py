@@ -1,4 +1,4 @@
-"""Exact mode's entry points: a path's or a drawing's smooth runs fitted as curvature splines (cubic curvature in arc length).
+"""Exact mode's entry points: a path's smooth runs fitted as curvature splines (cubic curvature in arc length).
 
 The engine traces exactly any curve whose signed curvature is a cubic polynomial of arc length on
 each piece (:class:`~skatetrace.figures.geometry.Spiral`), as well as arcs and lines
@@ -10,7 +10,7 @@ and refinement :mod:`skatetrace.drawings.exact_runs`, the results :mod:`skatetra
 and the figure :mod:`skatetrace.drawings.exact_figure`.
 
 1. The path is cut into tangent-continuous *runs* and spiral *spans* exactly as for arc fitting
-   (:func:`skatetrace.drawings.fitting.split_path`).
+   (:func:`skatetrace.drawings.splitting.split_path`).
 2. A span of constant curvature ("arc" or "line") becomes one Segment of the span's curvature and
    length. A "spiral" span becomes a chain of Spirals: its curvature kappa(s) is sampled at knots
    uniform in arc length s (arc length of the source by adaptive 5-point Gauss-Legendre, knots
@@ -62,7 +62,9 @@ from .curves import Drawing, Path
 from ..errors import FitError
 from .exact_results import ExactDrawingFit, ExactPathFit, ExactRun, ExactStatus, ExactWhere
 from .exact_runs import RunGeom, RunResult, refine
-from .fitting import Run, _check_tol, _split, _wrap
+from .corners import _wrap
+from .fitting import _check_tol
+from .splitting import Run, _split
 from ..figures.geometry import Pose, Segment, Spiral
 
 __all__ = ["MAX_PIECES", "fit_exact_path", "fit_exact_drawing"]
@@ -81,7 +83,7 @@ def fit_exact_path(path: Path, tol: float, *, corner_tol_deg: float = 0.5,
     tol : float
         Largest allowed deviation (see the module docstring), in the path's units.
     corner_tol_deg : float
-        See :func:`skatetrace.drawings.fitting.split_path`. A kink of up to this much at a smooth join inside a
+        See :func:`skatetrace.drawings.splitting.split_path`. A kink of up to this much at a smooth join inside a
         run stays in the run; the layout keeps its direction there, so the kink costs about its angle
         times the rest of the run: lower ``corner_tol_deg`` (make it a corner) for tight ``tol``.
     max_pieces : int
@@ -100,7 +102,7 @@ def fit_exact_path(path: Path, tol: float, *, corner_tol_deg: float = 0.5,
     ------
     FitError
         Invalid ``tol``, ``corner_tol_deg`` or ``max_pieces``, or a path that cannot be split (see
-        :func:`skatetrace.drawings.fitting.split_path`).
+        :func:`skatetrace.drawings.splitting.split_path`).
 
     Examples
     --------

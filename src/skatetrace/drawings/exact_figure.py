@@ -5,7 +5,7 @@ from __future__ import annotations
 from ..errors import FitError
 from ..figures.figure import Figure
 from .exact_results import ExactDrawingFit, ExactPathFit
-from .fitting import _check_reverse, _figure_curves
+from .to_figure import _check_reverse, _figure_curves
 
 __all__ = ["figure_from_exact"]
 
@@ -15,9 +15,9 @@ def figure_from_exact(fit: ExactPathFit | ExactDrawingFit, *, name: str, params=
     """A :class:`~skatetrace.figures.figure.Figure` from an exact-mode fit: one curve per path.
 
     Pieces of a run are joined smoothly; at corners the joins of
-    :func:`skatetrace.drawings.fitting.corner_join` (a cusp that pivots, or reverses above
+    :func:`skatetrace.drawings.corners.corner_join` (a cusp that pivots, or reverses above
     ``reverse_above_deg``); a closed path's curve gets the closing join. Laid out with
-    :meth:`Curve.layout`, the pieces reproduce the fit's layout (as :func:`skatetrace.drawings.fitting.figure_from_fit`).
+    :meth:`Curve.layout`, the pieces reproduce the fit's layout (as :func:`skatetrace.drawings.to_figure.figure_from_fit`).
 
     Raises
     ------

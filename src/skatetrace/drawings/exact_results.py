@@ -12,7 +12,7 @@ from enum import Enum
 from typing import NamedTuple
 
 from ..figures.figure import Join
-from .fitting import corner_join
+from .corners import corner_join
 from ..figures.geometry import Pose, end_pose
 
 __all__ = ["ExactStatus", "ExactWhere", "ExactRun", "ExactPathFit", "ExactDrawingFit"]
@@ -45,7 +45,7 @@ class ExactRun:
     pieces : tuple of Segment or Spiral
         Laid out one after the other with :func:`skatetrace.figures.geometry.end_pose`.
     corner : float or None
-        As :attr:`skatetrace.drawings.fitting.Run.corner`, recomputed from the laid-out directions: the signed
+        As :attr:`skatetrace.drawings.splitting.Run.corner`, recomputed from the laid-out directions: the signed
         turn of travel direction at the corner before this run.
     deviation : float
         Measured upper bound of ``sup_s |X_exact(s) - X_src(s)|`` over the run (see
@@ -75,7 +75,7 @@ class ExactRun:
         return out
 
     def join(self, reverse_above_deg: float = 90.0) -> Join | None:
-        """The figure join at the corner before this run; see :func:`skatetrace.drawings.fitting.corner_join`."""
+        """The figure join at the corner before this run; see :func:`skatetrace.drawings.corners.corner_join`."""
         return corner_join(self.corner, reverse_above_deg)
 
 

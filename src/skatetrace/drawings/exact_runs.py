@@ -17,7 +17,9 @@ import numpy as np
 from .curves import Piece
 from .exact_results import ExactStatus
 from .exact_spans import SpanGeom, subspans
-from .fitting import Run, _noisy, _wrap
+from .corners import _wrap
+from .curves import _noisy
+from .splitting import Run
 from ..figures.geometry import Pose, travel
 
 __all__ = ["RunGeom", "RunResult", "refine"]

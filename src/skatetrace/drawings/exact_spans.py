@@ -19,7 +19,10 @@ from scipy.interpolate import CubicSpline
 
 from .curves import AffinePiece, Piece, SplinePiece, curvature
 from ..errors import FitError
-from .fitting import Span, _direction, _gl_lengths, _wrap
+from .corners import _wrap
+from .curves import _gl_lengths
+from .spirals import Span
+from .splitting import _direction
 from ..figures.geometry import Segment, Spiral, shifted_polynomial
 
 __all__ = ["SpanGeom", "subspans", "SAMPLES", "START_TURN", "START_DENSITY"]

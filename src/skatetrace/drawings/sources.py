@@ -215,7 +215,8 @@ def _exact_note(exact) -> tuple[str, ...]:
 
 
 def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float, exact=None) -> Resolved:
-    from .fitting import figure_from_fit, fit_drawing
+    from .fitting import fit_drawing
+    from .to_figure import figure_from_fit
     from ..dynamics.presets import skater_params
 
     value, unit = _size(size)

@@ -1,0 +1,305 @@
+"""Splitting a path into smooth runs: cut at corners between pieces and cusps inside them.
+
+:func:`split_path` cuts a :class:`~skatetrace.drawings.curves.Path` into *runs*, maximal
+tangent-continuous (G1) stretches, at corners between pieces and at cusps inside a piece (where the
+parametric speed ``|r'(t)|`` vanishes), and each run into spiral spans (:mod:`.spirals`) at
+inflections and curvature extrema. Arc-spline fitting (:mod:`.fitting`) and exact fitting
+(:mod:`.exact`) both start here.
+
+Notation: kappa is signed curvature (positive turns left), t a piece's parameter in ``[0, 1]``,
+"size" the larger side of the path's bounding box. Thresholds that decide what is rounding (a tiny
+piece, a gap, a cusp) are relative to the size and listed as module constants below.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from .corners import _wrap
+from .curves import AffinePiece, BezierPiece, LinePiece, Path, Piece, _col, piece_length
+from .spirals import Span, _spiral_spans
+from ..errors import FitError
+
+__all__ = ["Run", "split_path"]
+
+# Relative to the path's size.
+TINY = 1e-10  # a piece, or the bit of a piece before a cusp, shorter than this is rounding: dropped
+GAP = 1e-9  # consecutive pieces must meet within this
+CUSP_RADIUS = 1e-10  # a speed minimum whose radius bound |r'|^2/|r''| is below this is a cusp
+
+
+@dataclass(frozen=True, slots=True)
+class Run:
+    """A maximal tangent-continuous stretch of a path, cut into spiral spans.
+
+    Attributes
+    ----------
+    spans : tuple of Span
+        In travel order; consecutive spans share their end point and heading.
+    corner : float or None
+        Signed change of travel direction (radians, in ``(-pi, pi]``) at the corner before the run;
+        about ``pi`` in magnitude at a cusp. ``None`` for the first run of an open path. For a closed
+        path the first run's corner is where the path closes (``0.0`` if it closes smoothly).
+    """
+
+    spans: tuple[Span, ...]
+    corner: float | None
+
+
+def _bezier_end_direction(piece: Piece, t: float) -> np.ndarray | None:
+    """Exact end tangent of a Bézier (also under affine maps): the first non-zero control difference."""
+    if isinstance(piece, AffinePiece):
+        v = _bezier_end_direction(piece.base, t)
+        if v is None:
+            return None
+        w = np.asarray(piece.A, float) @ v
+        n = math.hypot(w[0], w[1])
+        return w / n if n > 0 and math.isfinite(n) else None
+    if not isinstance(piece, BezierPiece):
+        return None
+    p = np.asarray(piece.control, float)
+    extent = float(np.max(np.ptp(p, axis=0)))
+    if not extent > 0:
+        return None
+    order = range(1, len(p)) if t == 0.0 else range(len(p) - 2, -1, -1)
+    for k in order:
+        v = p[k] - p[0] if t == 0.0 else p[-1] - p[k]
+        n = math.hypot(v[0], v[1])
+        if n > 1e-12 * extent:
+            return v / n
+    return None
+
+
+def _direction(piece: Piece, t: float, side: int, vscale: float, cusp: bool = False) -> np.ndarray | None:
+    """Unit travel direction leaving ``t`` (``side=+1``) or arriving at it (``side=-1``).
+
+    Where ``r'`` vanishes (a zero-length Bézier handle, a cusp) it is the limit direction: the next
+    non-zero Bézier control difference, else ``+-r''``, else a one-sided difference of points.
+    """
+    if t in (0.0, 1.0) and not cusp:
+        v = _bezier_end_direction(piece, t)
+        if v is not None:
+            return v
+    d1 = _col(piece, "d1", t)
+    sp = math.hypot(d1[0], d1[1])
+    if not cusp and sp > 1e-7 * vscale:
+        return d1 / sp
+    d2 = _col(piece, "d2", t)
+    n2 = math.hypot(d2[0], d2[1])
+    if n2 > 1e-7 * vscale:
+        return side * d2 / n2
+    p = _col(piece, "point", t)
+    for h in (1e-6, 1e-4, 1e-2, 1e-1):
+        t2 = min(max(t + side * h, 0.0), 1.0)
+        if t2 == t:
+            continue
+        v = _col(piece, "point", t2) - p
+        n = math.hypot(v[0], v[1])
+        if n > 1e-12 * vscale:
+            return side * v / n
+    return None
+
+
+def _cusps(piece: Piece, scale: float) -> list[float]:
+    """Parameters in ``[0, 1]`` where the speed ``|r'|`` vanishes (to within rounding of the size)."""
+    if isinstance(piece, LinePiece):
+        return []
+    t = np.linspace(0.0, 1.0, 1025)
+    d = piece.d1(t)
+    sp = np.hypot(d[0], d[1])
+    top = float(np.max(sp))
+    if not top > 0:
+        return []
+    left = np.concatenate([[np.inf], sp[:-1]])
+    right = np.concatenate([sp[1:], [np.inf]])
+    cand = np.nonzero((sp <= left) & (sp <= right) & (sp < 1e-2 * top))[0]
+    out: list[float] = []
+
+    def speed(x: float) -> float:
+        v = _col(piece, "d1", x)
+        return math.hypot(v[0], v[1])
+
+    for i in cand:
+        a, b = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
+        res = minimize_scalar(speed, bounds=(a, b), method="bounded", options={"xatol": 1e-14})
+        ts, s = (float(res.x), float(res.fun)) if res.fun <= sp[i] else (float(t[i]), float(sp[i]))
+        d2 = _col(piece, "d2", ts)
+        n2 = math.hypot(d2[0], d2[1])
+        if s == 0.0 or (n2 > 0 and s * s <= CUSP_RADIUS * scale * n2):
+            if not out or ts - out[-1] > 1e-9:
+                out.append(ts)
+    return out
+
+
+class _Prepared(NamedTuple):
+    scale: float
+    lengths: tuple[float, ...]
+
+
+def _prepare(path: Path) -> _Prepared:
+    """Validate a path's points; its size (larger bounding-box side) and piece lengths."""
+    if not isinstance(path, Path):
+        raise FitError(f"expected a skatetrace.drawings.curves.Path, got {type(path).__name__}")
+    pts = []
+    t = np.linspace(0.0, 1.0, 129)
+    for i, p in enumerate(path.pieces):
+        with np.errstate(all="ignore"):
+            xy = np.asarray(p.point(t), dtype=float)
+            d1 = np.asarray(p.d1(t), dtype=float)
+            d2 = np.asarray(p.d2(t), dtype=float)
+        if not (np.all(np.isfinite(xy)) and np.all(np.isfinite(d1)) and np.all(np.isfinite(d2))):
+            raise FitError(f"path {path.name!r}, piece {i}: points or derivatives are not finite")
+        pts.append(xy)
+    xy = np.hstack(pts)
+    scale = float(max(np.ptp(xy[0]), np.ptp(xy[1])))
+    if not scale > 0:
+        raise FitError(f"path {path.name!r} has zero extent: all its points coincide")
+    if not (1e-100 < scale < 1e100) or float(np.max(np.abs(xy))) > 1e100:
+        raise FitError(f"path {path.name!r}: size {scale:.3g} (coordinates up to {np.max(np.abs(xy)):.3g}) is "
+                       "outside 1e-100..1e100; rescale the drawing")
+    lengths = tuple(piece_length(p, 0.0, 1.0, 64) for p in path.pieces)
+    if not all(math.isfinite(v) for v in lengths):
+        raise FitError(f"path {path.name!r}: a piece has non-finite length")
+    return _Prepared(scale, lengths)
+
+
+class _Range(NamedTuple):
+    piece: int
+    a: float
+    b: float
+    cusp_a: bool
+    cusp_b: bool
+
+
+def _ranges(path: Path, prep: _Prepared) -> list[_Range]:
+    """Pieces cut at their cusps, with pieces and bits of pieces below rounding dropped."""
+    out = []
+    for i, p in enumerate(path.pieces):
+        if prep.lengths[i] <= TINY * prep.scale:
+            continue
+        cuts = [0.0, *(c for c in _cusps(p, prep.scale) if 0.0 < c < 1.0), 1.0]
+        parts = []
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            if b > a and piece_length(p, a, b, 32) > TINY * prep.scale:
+                parts.append((a, b))
+        for a, b in parts:
+            out.append(_Range(i, a, b, a > 0.0, b < 1.0))
+    if not out:
+        raise FitError(f"path {path.name!r} has zero length")
+    return out
+
+
+def _split(path: Path, corner_tol_deg: float) -> tuple[list[Run], _Prepared]:
+    if not (isinstance(corner_tol_deg, (int, float)) and math.isfinite(corner_tol_deg)
+            and 0 <= corner_tol_deg < 180):
+        raise FitError(f"corner_tol_deg must be in [0, 180) degrees, got {corner_tol_deg!r}")
+    prep = _prepare(path)
+    scale, pieces = prep.scale, path.pieces
+    ranges = _ranges(path, prep)
+    n = len(ranges)
+    dirs_in, dirs_out = [], []
+    for r in ranges:
+        p, vscale = pieces[r.piece], max(prep.lengths[r.piece], 1e-300)
+        chord = _col(p, "point", r.b) - _col(p, "point", r.a)
+        cn = math.hypot(chord[0], chord[1])
+        fallback = chord / cn if cn > 0 else np.array([1.0, 0.0])
+        d_in = _direction(p, r.a, +1, vscale, r.cusp_a)
+        d_out = _direction(p, r.b, -1, vscale, r.cusp_b)
+        dirs_in.append(fallback if d_in is None else d_in)
+        dirs_out.append(fallback if d_out is None else d_out)
+    tol = math.radians(corner_tol_deg)
+    # Junction j sits between range j-1 and range j; junction 0 is the closure of a closed path.
+    corner: list[float | None] = [None] * n
+    reason = ["start"] * n
+    for j in range(0 if path.closed else 1, n):
+        prev, cur = ranges[j - 1], ranges[j]
+        end = _col(pieces[prev.piece], "point", prev.b)
+        start = _col(pieces[cur.piece], "point", cur.a)
+        gap = math.hypot(*(end - start))
+        if gap > GAP * scale:
+            where = "closes" if j == 0 else f"pieces {prev.piece} and {cur.piece} meet"
+            raise FitError(f"path {path.name!r}: a gap of {gap:.3g} where the path {where} "
+                           f"(allowed {GAP:g} of the size {scale:.3g}); join the pieces or open the path")
+        u, v = dirs_out[j - 1], dirs_in[j]
+        delta = _wrap(math.atan2(u[0] * v[1] - u[1] * v[0], u[0] * v[0] + u[1] * v[1]))
+        same_piece = prev.piece == cur.piece and j > 0
+        if abs(delta) <= tol:
+            m = u + v
+            m = m / math.hypot(m[0], m[1])
+            dirs_out[j - 1], dirs_in[j] = m, m
+            corner[j] = 0.0
+            reason[j] = "join"
+        else:
+            corner[j] = delta
+            reason[j] = "cusp" if same_piece else "corner"
+    runs: list[list[Span]] = []
+    corners: list[float | None] = []
+    for j, r in enumerate(ranges):
+        spans = _spiral_spans(pieces[r.piece], r.piece, r.a, r.b, math.atan2(dirs_in[j][1], dirs_in[j][0]),
+                              math.atan2(dirs_out[j][1], dirs_out[j][0]), reason[j],
+                              piece_length(pieces[r.piece], r.a, r.b, 64))
+        if j == 0 or reason[j] != "join":
+            runs.append(spans)
+            corners.append(corner[j])
+        else:
+            runs[-1].extend(spans)
+    if path.closed and reason[0] == "join":
+        if len(runs) > 1:
+            first = runs.pop(0)
+            corners.pop(0)
+            runs[-1].extend(first)
+        else:
+            corners[0] = 0.0
+    return [Run(tuple(s), c) for s, c in zip(runs, corners)], prep
+
+
+def split_path(path: Path, *, corner_tol_deg: float = 0.5) -> list[Run]:
+    """Cut a path into tangent-continuous runs, and each run into spiral spans.
+
+    Parameters
+    ----------
+    path : skatetrace.drawings.curves.Path
+    corner_tol_deg : float
+        Consecutive pieces whose unit tangents differ by at most this (degrees) join smoothly; the
+        fit then uses the mean direction on both sides, so the arc spline stays G1 there.
+
+    Returns
+    -------
+    list of Run
+
+    Raises
+    ------
+    FitError
+        If the path has zero length or extent, non-finite points, or pieces that do not meet.
+
+    Notes
+    -----
+    Corners: at a piece end where ``r'`` vanishes (a zero-length Bézier handle) the tangent is the
+    limit direction (the next non-zero control-point difference, else ``r''``). Cusps inside a piece:
+    local minima of ``|r'|`` on a 1025-point grid refined by bounded Brent minimisation; a minimum is a
+    cusp when ``|r'|^2 / |r''|`` (a lower bound of the radius of curvature there) is below
+    ``CUSP_RADIUS`` times the size. Its two sides have limit directions ``-r''`` and ``+r''``, so a true
+    cusp turns by about ``pi``. Spiral spans: sign changes of kappa and of its grid differences on 513
+    points per stretch, ignoring values within their rounding error (see
+    :func:`~skatetrace.drawings.spirals._spiral_spans`), refined by brentq (on kappa, and on a central
+    difference of kappa, with a bounded minimisation of kappa as fall-back); splits within
+    ``SPLIT_MIN`` of an end or of each other are dropped.
+
+    Examples
+    --------
+    >>> from skatetrace.drawings.curves import FunctionPiece
+    >>> sine = FunctionPiece(lambda u: (u, np.sin(u)), 0.0, 2 * np.pi,
+    ...                      lambda u: (np.ones_like(u), np.cos(u)), lambda u: (np.zeros_like(u), -np.sin(u)))
+    >>> [run] = split_path(Path((sine,)))
+    >>> [(round(s.t0 * 2 * np.pi, 6), s.reason) for s in run.spans]
+    [(0.0, 'start'), (1.570796, 'extremum'), (3.141593, 'inflection'), (4.712389, 'extremum')]
+    >>> vee = Path((BezierPiece(((0.0, 0.0), (1.0, 0.0), (0.5, 0.0))),))   # out and back: a cusp
+    >>> [round(abs(r.corner or 0.0), 9) for r in split_path(vee)]
+    [0.0, 3.141592654]
+    """
+    return _split(path, corner_tol_deg)[0]
