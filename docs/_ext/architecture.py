@@ -90,7 +90,7 @@ def draw(stack: list[list[str]], path: Path) -> None:
     if missing:
         raise ValueError(f"docs/_ext/architecture.py: pipeline stages {missing} are not layers of the contract")
     width, row = 10.0, 1.0
-    fig, ax = plt.subplots(figsize=(11, 0.95 * len(stack) + 0.6))
+    fig, ax = plt.subplots(figsize=(8.2, 0.9 * len(stack) + 0.3))
     centres = {}
     for depth, layer in enumerate(stack):
         y = (len(stack) - 1 - depth) * row
@@ -103,15 +103,15 @@ def draw(stack: list[list[str]], path: Path) -> None:
                                         facecolor="#dbe9f6" if in_pipeline else "#eeeeee",
                                         edgecolor="#3b6ea5" if in_pipeline else "#888888"))
             label = "skatetrace." + stage
-            ax.text(x0 + 0.2, y + row - 0.3, label, fontsize=10, fontweight="bold", va="center")
-            job = textwrap.fill(summary(stage), width=int(105 * w / width), max_lines=2, placeholder=" …")
-            ax.text(x0 + 0.2, y + 0.33, job, fontsize=7.5, va="center", color="#333333", linespacing=1.3)
-            centres[stage] = (x0 + w - 0.9, y + row / 2)
+            ax.text(x0 + 0.2, y + row - 0.27, label, fontsize=11, fontweight="bold", va="center")
+            job = textwrap.fill(summary(stage), width=int(56 * w / width) + 4, max_lines=3, placeholder=" …")
+            ax.text(x0 + 0.2, y + 0.4, job, fontsize=8.5, va="center", color="#333333", linespacing=1.15)
+            centres[stage] = (x0 + w - 0.85, y + row - 0.27)
     # the path of a figure through the stages, bottom of the stack upwards, on the right
     previous = None
     for stage, step in PIPELINE:
         x, y = centres[stage]
-        ax.text(x, y, step, fontsize=8, ha="center", va="center", color="#b03a2e", fontweight="bold",
+        ax.text(x, y, step, fontsize=9, ha="center", va="center", color="#b03a2e", fontweight="bold",
                 bbox=dict(boxstyle="round,pad=0.25", facecolor="white", edgecolor="#b03a2e"))
         if previous is not None:
             ax.add_patch(FancyArrowPatch(previous, (x, y), arrowstyle="-|>", mutation_scale=12,
