@@ -3,6 +3,6 @@
 The commands (:mod:`.commands`) and the compiled-code warm-up they run first (:mod:`.compiled`).
 """
 
-from .commands import main
+from .commands import build_parser, main
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]

@@ -20,7 +20,7 @@ from ..drawings.sources import DRAWING_SUFFIXES
 from ..pipeline import REST_POLICIES
 from ..tracing.sections import TraceOptions
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]
 
 
 def _add_source_args(t) -> None:
@@ -63,7 +63,23 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"skatetrace: error: {message} (see '{self.prog} --help')\n")
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
+    """The ``skatetrace`` argument parser, with every subcommand and option.
+
+    Public so that the documentation's CLI reference is generated from it (sphinx-argparse) and
+    cannot drift from the command line.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        A parser whose usage errors print ``skatetrace: error: ...`` and exit with code 2.
+
+    Examples
+    --------
+    >>> args = build_parser().parse_args(["trace", "circle", "--out", "out"])
+    >>> args.command, args.figure, args.out
+    ('trace', 'circle', 'out')
+    """
     p = _Parser(prog="skatetrace", description="Controls that make a skater trace a figure exactly.")
     p.add_argument("--version", action="version", version=f"skatetrace {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -510,7 +526,7 @@ def _finish_folder(folder) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
-    parser = _parser()
+    parser = build_parser()
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:

@@ -86,7 +86,7 @@ class SleighParams:
 
 
 def velocities(params: SleighParams, p1, p2, a, b, adot, bdot):
-    """Body velocities from momenta and controls, eqs. (xi1_eq), (xi2_eq), (eta_eq).
+    """Body velocities from momenta and controls: the paper's equations (xi1_eq), (xi2_eq), (eta_eq).
 
     Returns
     -------
@@ -126,7 +126,7 @@ def momenta(params: SleighParams, xi1, xi2, a, b, adot, bdot):
 
 
 def rhs(params: SleighParams, state, a, b, adot, bdot):
-    """Time derivative of ``state = (p1, p2, theta, x, y)``, eqs. (p1_eq)-(y_eq).
+    """Time derivative of ``state = (p1, p2, theta, x, y)``: the paper's equations (p1_eq)-(y_eq).
 
     Parameters
     ----------

@@ -14,7 +14,7 @@ up to any ``t* - tau``:
 - Near ``a = 0`` the lateral velocity of the mass is ``eta ~ bdot``, so the momenta move with
   ``b``: ``dp1/db = -m xi2``, ``dp2/db = kappa m xi2``. Along the motion
   ``dF/dt = F_b bdot = (F_b / (g a)) F`` with
-  ``F_b = dF/db - m xi2 dF/dp1 + kappa m xi2 dF/dp2``, and ``a = adot* (t - t*)``. Hence
+  ``F_b = dF/db - m xi2 dF/dp1 + kappa m xi2 dF/dp2``, and ``a = adot* (t - t*)``. Hence::
 
       F ~ |t - t*|^mu,   mu = F_b / (g adot*),
       bdot ~ |t - t*|^(mu - 1),   KE_m ~ m bdot^2 / 2 ~ |t - t*|^(2 (mu - 1)),

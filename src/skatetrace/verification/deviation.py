@@ -1,7 +1,7 @@
-"""The paper's general deviation cost C, eq. (C_control).
+"""The paper's general deviation cost C, its equation (C_control).
 
 A simulated path ``(x_s, y_s)`` is re-parametrised by its own arc length and compared with the
-target curve ``(X(s), Y(s))`` at equal arc length from their starts:
+target curve ``(X(s), Y(s))`` at equal arc length from their starts::
 
     C = integral_0^S |x_s(s) - X(s)|^p + |y_s(s) - Y(s)|^p ds,   S = min(S_s, S_d),  p > 1.
 
@@ -86,7 +86,7 @@ def segments_target(start: Pose, segments: Sequence[Segment]) -> tuple[Target, f
 
 def deviation_cost(path, target: Target, target_length: float, *, p: float = 2.0,
                    samples: int = 4001) -> DeviationCost:
-    """C of a simulated path against a target curve, eq. (C_control).
+    """C of a simulated path against a target curve, the paper's equation (C_control).
 
     Parameters
     ----------
