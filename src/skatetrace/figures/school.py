@@ -48,7 +48,7 @@ each reverse it, and the reversed figure is the mirror image in the long axis (`
 "left, inside" gives the same path as "right, outside". A backward start also makes the blade run
 backwards, which a :class:`Curve` cannot express (its blade starts forwards): the pieces describe the
 path of travel and ``figure.extra["school"]["start_direction"] == -1`` records the blade's direction.
-The model is symmetric under ``(a, b, p2, xi2) -> -(a, b, p2, xi2)`` (PHYSICS.md; tracing.py uses it
+The model is symmetric under ``(a, b, p2, xi2) -> -(a, b, p2, xi2)`` (PHYSICS.md; tracing.sections uses it
 for every backward section), so the controls are those of the path skated forwards with the mass
 mirrored through the contact point. The edges actually skated are in ``extra["school"]["sequence"]``.
 
