@@ -97,22 +97,43 @@ def atomic_write(path: str | Path, data: str | bytes) -> None:
         write_atomically(path, lambda tmp: tmp.write_text(data, encoding="utf-8", newline=""))
 
 
-def json_safe(obj: Any) -> Any:
-    """JSON-safe copy: numpy scalars and arrays to Python, non-finite floats to None."""
+def json_safe(obj: Any, *, nonfinite: Callable[[float], Any] | None = None,
+              other: Callable[[Any], Any] | None = None) -> Any:
+    """JSON-safe copy: numpy scalars and arrays made Python ones, non-finite floats replaced.
+
+    Parameters
+    ----------
+    obj : Any
+        Nested dicts, lists, tuples, numpy arrays and scalars.
+    nonfinite : callable, optional
+        What a NaN or an infinity becomes, from its value; default ``None`` (JSON ``null``).
+    other : callable, optional
+        What a value JSON cannot hold (a set, an object) becomes; default: left as it is, so that
+        ``json.dumps`` refuses it.
+
+    Examples
+    --------
+    >>> json_safe({"a": np.float64(float("inf")), 1: (np.int64(2), np.bool_(True))})
+    {'a': None, '1': [2, True]}
+    """
     if isinstance(obj, dict):
-        return {str(k): json_safe(v) for k, v in obj.items()}
+        return {str(k): json_safe(v, nonfinite=nonfinite, other=other) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
+        return [json_safe(v, nonfinite=nonfinite, other=other) for v in obj]
     if isinstance(obj, np.ndarray):
-        return json_safe(obj.tolist())
+        return json_safe(obj.tolist(), nonfinite=nonfinite, other=other)
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
     if isinstance(obj, (np.floating, float)):
         v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
+        if math.isfinite(v):
+            return v
+        return None if nonfinite is None else nonfinite(v)
+    if other is None or obj is None or isinstance(obj, str):
+        return obj
+    return other(obj)
 
 
 def dumps_json(obj: Any, *, indent: int | None = 2) -> str:

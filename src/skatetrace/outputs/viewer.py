@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from .files import atomic_write
+from .files import atomic_write, json_safe
 from .playback import Playback, load_playback
 
 __all__ = ["viewer_html", "write_viewer", "sample_rows", "default_speed", "SPEED_FACTORS"]
@@ -142,24 +142,13 @@ def _round_list(values: np.ndarray, digits: int, scale: float | None = None) -> 
     return out
 
 
+def _nonfinite_name(x: float) -> str:
+    return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
+
+
 def _jsonable(obj: Any) -> Any:
-    """``obj`` with numpy scalars made Python ones and non-finite floats made strings."""
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        x = float(obj)
-        return x if math.isfinite(x) else ("nan" if math.isnan(x) else ("inf" if x > 0 else "-inf"))
-    if obj is None or isinstance(obj, str):
-        return obj
-    return str(obj)
+    """``obj`` with numpy scalars made Python ones, non-finite floats made strings, other objects text."""
+    return json_safe(obj, nonfinite=_nonfinite_name, other=str)
 
 
 def _simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
