@@ -1,17 +1,15 @@
 """The benchmark scripts run on a small case (timings are never asserted)."""
 
-import importlib.util
 import math
 from pathlib import Path
+
+from scripts import load_script
 
 BENCH = Path(__file__).resolve().parents[1] / "bench"
 
 
 def _load(name):
-    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(BENCH / f"{name}.py")
 
 
 def test_bench_paper_arcs_small(capsys):

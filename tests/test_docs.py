@@ -9,12 +9,12 @@ gallery page, a stage without a docstring or a paragraph on the architecture pag
 from __future__ import annotations
 
 import ast
-import importlib.util
 import re
 import tomllib
 from pathlib import Path
 
 import pytest
+from scripts import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -23,10 +23,7 @@ PACKAGE = ROOT / "src" / "skatetrace"
 
 def _architecture():
     """The build-time generator of the architecture page, ``docs/_ext/architecture.py``."""
-    spec = importlib.util.spec_from_file_location("docs_architecture", DOCS / "_ext" / "architecture.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script(DOCS / "_ext" / "architecture.py", "docs_architecture")
 
 
 def _subpackages() -> list[str]:

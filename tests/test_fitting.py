@@ -4,7 +4,6 @@ Splitting, biarcs, distances and figures have their own tests (test_splitting, t
 test_arc_distances, test_to_figure).
 """
 
-import importlib.util
 import math
 import warnings
 from pathlib import Path as FsPath
@@ -16,6 +15,7 @@ from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 from fitting_cases import bezier_spiral, ellipse_quarter, heading_gap, sine_piece, size_of
+from scripts import load_script
 from skatetrace.drawings import fitting
 from skatetrace.drawings.curves import BezierPiece, EllipticArcPiece, FunctionPiece, LinePiece, Path, piece_length
 from skatetrace.errors import FitError, SkatetraceError
@@ -316,10 +316,7 @@ def test_degenerate_input_never_nan_or_crash(polys, closed, scale, method):
 
 
 def test_bench_fit_quick(capsys):
-    spec = importlib.util.spec_from_file_location("bench_fit", BENCH / "bench_fit.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    rows = mod.main(["--quick"])
+    rows = load_script(BENCH / "bench_fit.py").main(["--quick"])
     assert len(rows) == 1
     r = rows[0]
     assert r["greedy_success"] and r["min_success"]

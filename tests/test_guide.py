@@ -8,12 +8,12 @@ and run without Sphinx installed.
 from __future__ import annotations
 
 import importlib
-import importlib.util
 import json
 import re
 from pathlib import Path
 
 import pytest
+from scripts import load_script
 
 from test_readme import MACHINE_DIGITS, README, blocks, run_block
 
@@ -24,10 +24,7 @@ PYTHON_BLOCKS = [(name, i) for name, text in PAGES.items() for i in range(len(bl
 
 
 def _measure_examples():
-    spec = importlib.util.spec_from_file_location("measure_examples", ROOT / "bench" / "measure_examples.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script(ROOT / "bench" / "measure_examples.py")
 
 
 def test_the_guide_has_its_pages_and_examples():
