@@ -19,7 +19,7 @@ RTOL, ATOL = 1e-12, 1e-13
 def _fun(params, kappa, alpha):
     def f(t, y):
         out = np.empty(5)
-        if not _rhs.py_func(params.M, params.m, params.I, kappa, alpha, t, np.asarray(y, dtype=float), out):
+        if not _rhs.py_func(params.M, params.m, params.I, kappa, alpha, 0.0, t, np.asarray(y, dtype=float), out):
             raise FloatingPointError("singular point")
         return out
 

@@ -16,7 +16,7 @@ def test_inlined_rhs_matches_model(params):
     for _ in range(20):
         p1, p2, a, b, kappa, u = rng.normal(size=6)
         out = np.empty(5)
-        assert _rhs(params.M, params.m, params.I, kappa, u, 1.0, np.array([p1, p2, a, b, 0.0]), out)  # u = alpha t at t = 1
+        assert _rhs(params.M, params.m, params.I, kappa, u, 0.0, 1.0, np.array([p1, p2, a, b, 0.0]), out)  # u = alpha t + 0 at t = 1
         dp1, dp2, da, db, ds = out
         ad, bd, _ = constrained_rates(params, kappa, p1, p2, a, b, u)
         ref = rhs(params, np.array([p1, p2, 0.0, 0.0, 0.0]), a, b, ad, bd)

@@ -7,9 +7,10 @@ control, initial step, event rule and 7th-order dense output), specialised to th
 constrained system of :mod:`skatetrace.tracing.maneuver` and compiled with numba. A test compares it with
 ``solve_ivp(method="DOP853")`` on the same problem.
 
-The system integrated is ``y = (p1, p2, a, b, s)`` under the ramp control ``u = alpha t`` through
-*legs*: a leg ends where ``|s|`` reaches its switch length and the next one starts from that state
-(a smooth join). On each leg the curvature is a cubic polynomial of the distance travelled since
+The system integrated is ``y = (p1, p2, a, b, s)`` under the control ``u = alpha t + beta`` (a
+ramp, ``beta = 0``, for the manoeuvres; one affine piece of the planner's controls) through
+*legs*: a leg ends where ``|s|`` reaches its switch length and the next one starts from that
+state (a smooth join). On each leg the curvature is a cubic polynomial of the distance travelled since
 the leg started::
 
     kappa(sigma) = c0 + c1 sigma + c2 sigma^2 + c3 sigma^3,    sigma = |s| - s_start,
@@ -66,13 +67,13 @@ def _curvature(coef, s0, s):
 
 
 @njit(cache=True)
-def _rhs(M, m, I, kappa, alpha, t, y, out):
+def _rhs(M, m, I, kappa, alpha, beta, t, y, out):
     """Right-hand side of ``(p1, p2, a, b, s)`` for the curvature ``kappa`` given at ``y``.
 
     Returns False at the singular point itself.
     """
     p1, p2, a, b = y[0], y[1], y[2], y[3]
-    u = alpha * t
+    u = alpha * t + beta
     Mm = M + m
     c_a = m * (M * b + kappa * (I + m * a * a))
     c_b = m * a * (kappa * m * b - Mm)
@@ -98,31 +99,31 @@ def _rhs(M, m, I, kappa, alpha, t, y, out):
 
 
 @njit(cache=True)
-def _rhs_leg(M, m, I, coef, s0, alpha, t, y, out):
+def _rhs_leg(M, m, I, coef, s0, alpha, beta, t, y, out):
     """:func:`_rhs` on a leg with curvature coefficients ``coef`` starting at ``|s| = s0``."""
-    return _rhs(M, m, I, _curvature(coef, s0, y[4]), alpha, t, y, out)
+    return _rhs(M, m, I, _curvature(coef, s0, y[4]), alpha, beta, t, y, out)
 
 
 @njit(cache=True)
-def _speed(M, m, I, coef, s0, alpha, t, y, work):
+def _speed(M, m, I, coef, s0, alpha, beta, t, y, work):
     """Speed along the blade ``xi2`` (the ``"stopped"`` event); NaN at the singular point.
 
     ``work`` is a scratch array of 5 (the event is evaluated in tight loops: no allocation).
     """
-    if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, work):
+    if not _rhs_leg(M, m, I, coef, s0, alpha, beta, t, y, work):
         return np.nan
     return work[4]
 
 
 @njit(cache=True)
-def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g, work):
+def _event_values(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, g, work):
     """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit.
 
     The singular point ``(0, -kappa I / M)`` moves with the curvature at ``y``'s ``|s|``.
     ``work`` is a scratch array of 5.
     """
     g[0] = abs(y[4]) - switch
-    g[1] = _speed(M, m, I, coef, s0, alpha, t, y, work) if stop_event else 1.0
+    g[1] = _speed(M, m, I, coef, s0, alpha, beta, t, y, work) if stop_event else 1.0
     if sing_limit > 0.0:
         sing_b = -_curvature(coef, s0, y[4]) * I / M
         g[2] = math.hypot(y[2], y[3] - sing_b) - sing_limit
@@ -131,7 +132,7 @@ def _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit
 
 
 @njit(cache=True)
-def _dense_coefficients(M, m, I, coef, s0, alpha, t_old, h, y_old, y_new, f_new, K, Kx, ytmp, F):
+def _dense_coefficients(M, m, I, coef, s0, alpha, beta, t_old, h, y_old, y_new, f_new, K, Kx, ytmp, F):
     """The interpolant's coefficients ``F`` (7 x n) for the step just taken (3 extra stages).
 
     ``Kx`` (16 x n) and ``ytmp`` (n) are scratch arrays and ``F`` is written in place. Scalar
@@ -149,13 +150,13 @@ def _dense_coefficients(M, m, I, coef, s0, alpha, t_old, h, y_old, y_new, f_new,
             for j in range(s):
                 dy += _A_EXTRA[row, j] * Kx[j, i]
             ytmp[i] = y_old[i] + dy * h
-        _rhs_leg(M, m, I, coef, s0, alpha, t_old + _C_EXTRA[row] * h, ytmp, Kx[s])
+        _rhs_leg(M, m, I, coef, s0, alpha, beta, t_old + _C_EXTRA[row] * h, ytmp, Kx[s])
     rk.dense_coefficients(Kx, h, y_old, y_new, f_new, F)
     return F
 
 
 @njit(cache=True)
-def _initial_step(M, m, I, coef, s0, alpha, t0, y0, f0, t_bound, direction, rtol, atol):
+def _initial_step(M, m, I, coef, s0, alpha, beta, t0, y0, f0, t_bound, direction, rtol, atol):
     """scipy's ``select_initial_step`` for an 8th-order method (error estimator order 7)."""
     interval = abs(t_bound - t0)
     if interval == 0.0:
@@ -163,7 +164,7 @@ def _initial_step(M, m, I, coef, s0, alpha, t0, y0, f0, t_bound, direction, rtol
     h0, d1, scale = rk.initial_step_trial(y0, f0, interval, rtol, atol)
     y1 = y0 + h0 * direction * f0
     f1 = np.empty(y0.size)
-    _rhs_leg(M, m, I, coef, s0, alpha, t0 + h0 * direction, y1, f1)
+    _rhs_leg(M, m, I, coef, s0, alpha, beta, t0 + h0 * direction, y1, f1)
     return rk.initial_step(h0, d1, scale, f0, f1, interval)
 
 
@@ -181,7 +182,7 @@ def _grow(arr, n):
 
 
 @njit(cache=True)
-def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, sing_limit, max_nfev, dense):
+def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_event, sing_limit, max_nfev, dense):
     """Integrate through the legs; see :func:`integrate_legs`.
 
     ``kappas`` is the (nlegs, 4) array of curvature coefficients ``c0..c3`` of the legs.
@@ -221,10 +222,10 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
         coef = kappas[leg]  # a view: (c0, c1, c2, c3) of this leg
         s0 = switches[leg - 1] if leg > 0 else 0.0  # |s| where this leg starts
         switch = switches[leg]
-        if not _rhs_leg(M, m, I, coef, s0, alpha, t, y, f):
+        if not _rhs_leg(M, m, I, coef, s0, alpha, beta, t, y, f):
             return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
         nfev += 1
-        _event_values(M, m, I, coef, s0, alpha, t, y, switch, stop_event, sing_limit, g_old, work)
+        _event_values(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, g_old, work)
         # Where the curvature is continuous across the join (a chain of spirals) the right-hand side
         # is too, and the step size the last leg proposed carries over; where it jumps the control
         # rates jump, and the step is chosen afresh as scipy would for a new solve_ivp call.
@@ -234,7 +235,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
             k_end = _curvature(kappas[leg - 1], s_prev, s0)
             smooth = abs(k_end - coef[0]) <= 1e-12 * max(abs(k_end), abs(coef[0]), 1e-300)
         if not smooth:
-            h_abs = _initial_step(M, m, I, coef, s0, alpha, t, y, f, t_end, direction, rtol, atol)
+            h_abs = _initial_step(M, m, I, coef, s0, alpha, beta, t, y, f, t_end, direction, rtol, atol)
             nfev += 1
         while True:
             if direction * (t_end - t) <= 0.0:
@@ -264,7 +265,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                         for j in range(s):
                             acc += _A[s, j] * K[j, i]
                         ytmp[i] = y[i] + acc * h
-                    if not _rhs_leg(M, m, I, coef, s0, alpha, t + _C[s] * h, ytmp, kstage):
+                    if not _rhs_leg(M, m, I, coef, s0, alpha, beta, t + _C[s] * h, ytmp, kstage):
                         ok = False
                     for i in range(n):
                         K[s, i] = kstage[i]
@@ -274,7 +275,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                     for j in range(_NS):
                         acc += _B[j] * K[j, i]
                     ynew[i] = y[i] + h * acc
-                if not _rhs_leg(M, m, I, coef, s0, alpha, t + h, ynew, f_new):
+                if not _rhs_leg(M, m, I, coef, s0, alpha, beta, t + h, ynew, f_new):
                     ok = False
                 nfev += 1
                 if not ok or nfev > max_nfev:
@@ -292,14 +293,14 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
             if not finite:
                 return _NONFINITE, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
             # events: a sign change (or touch of zero) between the step's ends, as in solve_ivp
-            _event_values(M, m, I, coef, s0, alpha, t_new, ynew, switch, stop_event, sing_limit, g_new, work)
+            _event_values(M, m, I, coef, s0, alpha, beta, t_new, ynew, switch, stop_event, sing_limit, g_new, work)
             active = False
             for e in range(3):
                 if (g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0):
                     active = True
             F = F_none
             if dense or active:
-                F = _dense_coefficients(M, m, I, coef, s0, alpha, t, h, y, ynew, f_new, K, Kx, ytmp, F_step)
+                F = _dense_coefficients(M, m, I, coef, s0, alpha, beta, t, h, y, ynew, f_new, K, Kx, ytmp, F_step)
                 nfev += 3
             hit = -1
             t_hit = t_new
@@ -314,7 +315,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, t_end, rtol, atol, stop_event, si
                         mid = 0.5 * (lo + hi)
                         if mid == lo or mid == hi:
                             break
-                        _event_values(M, m, I, coef, s0, alpha, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
+                        _event_values(M, m, I, coef, s0, alpha, beta, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
                                       stop_event, sing_limit, g, work)
                         if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
                             lo, glo = mid, g[e]
@@ -425,8 +426,8 @@ class IntegrationResult:
 
 def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_end: float, *,
                    rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
-                   max_nfev: int = 150_000, dense: bool = False) -> IntegrationResult:
-    """Integrate ``(p1, p2, a, b, s)`` from ``t = 0`` under ``u = alpha t`` through legs.
+                   max_nfev: int = 150_000, dense: bool = False, beta: float = 0.0) -> IntegrationResult:
+    """Integrate ``(p1, p2, a, b, s)`` from ``t = 0`` under ``u = alpha t + beta`` through legs.
 
     Leg ``k`` runs from ``|s| = s_start`` (``switches[k - 1]``, or 0 for the first leg) to
     ``|s| = switches[k]`` and holds the curvature::
@@ -448,7 +449,7 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
     switches : array_like, shape (n,)
         The cumulative ``|s|`` at which each leg ends (``inf`` for the last).
     alpha : float
-        Slope of the ramp control ``u = alpha t``.
+        Slope of the ramp control ``u = alpha t + beta``.
     t_end : float
         Final time; negative integrates backwards.
     rtol, atol : float
@@ -462,6 +463,9 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
         Budget of right-hand-side evaluations; running out means the step size collapsed.
     dense : bool
         Keep the dense output of every step.
+    beta : float
+        Value of the control at ``t = 0`` (0 for the manoeuvres' ramps; the planner's controls are
+        piecewise linear in time, one affine piece per call).
 
     Returns
     -------
@@ -489,7 +493,7 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
     if coef.shape[0] == 0:
         raise ValueError("at least one leg is required")
     y = np.asarray(y0, dtype=float).copy()
-    out = _run(params.M, params.m, params.I, y, coef, sw, float(alpha), float(t_end), float(rtol), float(atol),
+    out = _run(params.M, params.m, params.I, y, coef, sw, float(alpha), float(beta), float(t_end), float(rtol), float(atol),
                bool(stop_event), float(singular_limit), int(max_nfev), bool(dense))
     status, leg, t, yf, bounds, st, sh, sy, sF, sleg, ns = out
     nlegs = int(leg) + 1
@@ -509,7 +513,7 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
 
 def final_state(params: SleighParams, y0: np.ndarray, coef: np.ndarray, switches: np.ndarray, alpha: float,
                 t_end: float, *, rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
-                max_nfev: int = 150_000) -> tuple[str | None, float, np.ndarray]:
+                max_nfev: int = 150_000, beta: float = 0.0) -> tuple[str | None, float, np.ndarray]:
     """Where :func:`integrate_legs` ends, without its checks and bookkeeping (no dense output).
 
     For the many short integrations of a manoeuvre solve. ``coef`` must be a float array of shape
@@ -517,7 +521,7 @@ def final_state(params: SleighParams, y0: np.ndarray, coef: np.ndarray, switches
     Returns ``(outcome, t, y)``: ``outcome`` is ``"stopped"`` or ``"singular"`` for a terminal
     event, ``"reached"`` for the end of the interval (or of the last leg) and ``None`` for a failure.
     """
-    out = _run(params.M, params.m, params.I, y0, coef, switches, float(alpha), float(t_end), float(rtol),
+    out = _run(params.M, params.m, params.I, y0, coef, switches, float(alpha), float(beta), float(t_end), float(rtol),
                float(atol), bool(stop_event), float(singular_limit), int(max_nfev), False)
     status = int(out[0])
     outcome = {_REACHED: "reached", _STOPPED: "stopped", _SINGULAR: "singular"}.get(status)
