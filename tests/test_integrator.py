@@ -73,6 +73,20 @@ def test_legs_and_dense_output_match_solve_ivp(t_end):
         assert abs(res.legs[i](res.leg_bounds[i + 1])[4]) == pytest.approx(sw, abs=1e-12)
 
 
+def test_an_offset_control_is_the_ramp_shifted_in_time():
+    """``u = alpha t + beta`` from 0 is the ramp ``alpha t`` from ``beta / alpha``: the same motion."""
+    y0 = _glide(1 / 1.2)
+    alpha, beta, h = 0.05, 0.2, 1.5
+    shifted = integrate_legs(P, y0, [1 / 1.2], [math.inf], alpha, h, rtol=RTOL, atol=ATOL, beta=beta)
+    t0 = beta / alpha
+    ref = solve_ivp(_fun(P, 1 / 1.2, alpha), (t0, t0 + h), y0, method="DOP853", rtol=RTOL, atol=ATOL)
+    assert shifted.status == 0
+    np.testing.assert_allclose(shifted.y, ref.y[:, -1], atol=1e-9 * np.abs(ref.y).max())
+    # and the offset matters: without it the mass ends elsewhere
+    plain = integrate_legs(P, y0, [1 / 1.2], [math.inf], alpha, h, rtol=RTOL, atol=ATOL)
+    assert np.max(np.abs(plain.y - shifted.y)) > 1e-3
+
+
 def test_stop_event_matches_solve_ivp():
     y0 = _glide(1 / 1.2)
     kappa, alpha = 1 / 1.2, -0.3
