@@ -31,6 +31,7 @@ import numpy as np
 from .dynamics.controls import ControlSchedule
 from .dynamics.model import SleighParams
 from .figures.figure import Figure, Section
+from .planning.planner import plan_figure
 from .tracing.sections import FigureTrace, TraceOptions, trace_figure
 from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
@@ -153,12 +154,16 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     rounds = 0
     while True:
         rounds += 1
-        trace = trace_figure(current, params, options, progress=progress, cache=cache)
+        if options.reach is None:
+            trace = trace_figure(current, params, options, progress=progress, cache=cache)
+        else:
+            trace = plan_figure(current, params, options, progress=progress)
         schedule, states = schedule_from_trace(trace)
         report = verify(trace, schedule, rel_tol=rel_tol)
         result = VerifiedTrace(figure=current, trace=trace, schedule=schedule, states=states, report=report,
                                rests=tuple(added), rounds=rounds)
-        if result.success or rests != "auto" or rounds > max_rounds:
+        # a planned figure is planned once: a rest changes the program, and the plan says why it failed
+        if result.success or rests != "auto" or rounds > max_rounds or options.reach is not None:
             return _finish(result, limits)
         # The replay carries each section's end state into the next, so a section may fail for an
         # error made before it: every section of the curve up to its last failing one is split.

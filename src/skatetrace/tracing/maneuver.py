@@ -102,6 +102,9 @@ def _basis(kind: str, params, duration) -> Callable[[float], float]:
     if kind == "ramp":
         (alpha,) = params
         return lambda t: alpha * t
+    if kind == "affine":
+        alpha, beta = params
+        return lambda t: alpha * t + beta
     if kind == "sines":
         a1, a2 = params
         w = math.pi / duration

@@ -45,6 +45,7 @@ class TraceStatus(Enum):
     SINGULAR = "the mass approached the singular set of the control law"
     RESIDUAL = "boundary conditions not met to the required tolerance"
     EXCURSION = "the mass would have to move implausibly far or the blade stall inside the section"
+    INFEASIBLE = "no motion of the mass within the reach traces the section"
 
 
 #: Accepted glide speeds (model length per time unit, or m/s).
@@ -96,6 +97,10 @@ class TraceOptions:
     atol: float = 1e-14
     placement: str = "least-reach"
     search: int = 16
+    reach: float | None = None
+    objective: str = "effort"
+    max_accel: float | None = None
+    max_mass_speed: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("speed", "maneuver_length", "glide_lateral", "residual_tol", "singular_limit", "excursion_limit",
@@ -116,6 +121,16 @@ class TraceOptions:
             raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
         if not (isinstance(self.search, int) and self.search >= 0):
             raise ValueError(f"search must be a whole number >= 0, got {self.search!r}")
+        for name in ("reach", "max_accel", "max_mass_speed"):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))
+                                      or not (math.isfinite(value) and value > 0)):
+                raise ValueError(f"{name} must be a positive finite number or None, got {value!r}")
+        if self.objective not in ("effort", "time"):
+            raise ValueError(f"objective must be 'effort' or 'time', got {self.objective!r}")
+        if self.objective == "time" and self.reach is not None and self.max_accel is None:
+            raise ValueError("objective='time' needs max_accel: without a bound on the mass's acceleration the "
+                             "least time has no minimum (the mass could be thrown arbitrarily hard)")
         if self.placement not in ("least-reach", "first"):
             raise ValueError(f"placement must be 'least-reach' or 'first', got {self.placement!r}")
         for name in ("residual_tol", "singular_limit", "excursion_limit", "rtol", "atol"):
@@ -131,6 +146,7 @@ class _Phase:
     maneuver: ManeuverSolution | None
     s0: float  # section arc length at the phase's start
     kappa: float = 0.0  # glide curvature
+    segment: int | None = None  # piece where the phase starts (planned phases; else the glide's)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -171,7 +187,10 @@ class SectionTrace:
         """Physical times of phase and segment boundaries (control rates may jump there)."""
         out = [0.0]
         for ph in self.phases:
-            if ph.maneuver is not None:
+            if ph.kind == "plan":
+                # the joins inside a planned phase; its bounds are the phase's own (no rounded copies)
+                out += [ph.t0 + leg.t1 for leg in ph.maneuver.legs[:-1]]
+            elif ph.maneuver is not None:
                 for leg in ph.maneuver.legs:
                     for t in (leg.t0, leg.t1):
                         out.append(self._section_time(ph, t))
@@ -236,7 +255,8 @@ class SectionTrace:
             # right the last leg starting at or before t, on the left the first ending at or after t.
             order = range(len(man.legs)) if ph.kind != "launch" else range(len(man.legs) - 1, -1, -1)
             legs = [man.legs[j] for j in order]
-            segidx = [g + step * j for j in order]
+            g0 = g if ph.segment is None else ph.segment
+            segidx = [g0 + step * j for j in order]
             los = np.array([min(leg.t0, leg.t1) for leg in legs])
             his = np.array([max(leg.t0, leg.t1) for leg in legs])
             eps = 1e-12 * max(1.0, abs(man.duration))  # section time -> local time loses a few ulps

@@ -1,0 +1,263 @@
+"""The exact finish: a planned section re-solved so that the full dynamics meets its end conditions to 1e-10.
+
+The collocation answer (:mod:`skatetrace.planning.collocation`) satisfies the dynamics only to
+its mesh's accuracy. Here its free control ``u`` (piecewise linear in time) is integrated by the
+compiled DOP853 of the manoeuvres, one affine piece per call, so that the curvature condition
+holds by construction to the integrator's tolerance, and six numbers are solved for by MINPACK's
+hybrid method: a scale of the time nodes and five coefficients of a correction
+``sum_i e_i sin(i pi t / 2T)`` of ``u`` (zero at the start, which stays at rest exactly). The
+residuals pin the end state: the arc length, the mass's position ``(a, b)`` and rates
+``(adot, bdot)`` as planned, and the speed along the blade zero (rest). The next section then
+starts from that position (and velocity, where the plan makes it continuous), exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import root
+
+from ..dynamics.integrator import integrate_legs
+from ..dynamics.model import SleighParams, velocities
+from ..figures.geometry import shifted_polynomial
+from ..tracing.maneuver import Leg, ManeuverSolution, constrained_rates
+
+__all__ = ["RestState", "FinishedSection", "finish_section", "rest_momenta"]
+
+_RESIDUAL_TOL = 1e-10
+_MODES = 5
+
+
+@dataclass(frozen=True, slots=True)
+class RestState:
+    """The mass's position and rates relative to the blade at a rest, in the section's travel frame."""
+
+    a: float
+    b: float
+    adot: float
+    bdot: float
+
+    def turned(self, angle: float) -> "RestState":
+        """The same motion on the ice seen from a frame turned by ``-angle`` (a pivot of ``-angle``)."""
+        c, s = math.cos(angle), math.sin(angle)
+        return RestState(c * self.a - s * self.b, s * self.a + c * self.b,
+                         c * self.adot - s * self.bdot, s * self.adot + c * self.bdot)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FinishedSection:
+    """An exact section: its phases (one per affine piece of ``u``), end state and residuals."""
+
+    success: bool
+    message: str
+    intervals: tuple[tuple[float, float, ManeuverSolution, float, int], ...]
+    start: RestState
+    end: RestState
+    residuals: dict[str, float]
+    nfev: int
+
+
+def rest_momenta(params: SleighParams, a, b, adot, bdot) -> tuple[float, float]:
+    """Momenta ``(p1, p2)`` of the sleigh at rest while the mass moves at ``(adot, bdot)``: the mass's own."""
+    m = params.m
+    return m * (a * bdot - b * adot), m * adot
+
+
+def _pieces(pieces):
+    """Cumulative ends and curvature coefficients of the section's pieces."""
+    ends = np.cumsum([p.length for p in pieces])
+    return ends, [tuple(p.coefficients) for p in pieces]
+
+
+def _legs_from(ends, coeffs, s_cur):
+    """Legs ``(coefficients, switch)`` from arc length ``s_cur`` on, with lengths measured from there."""
+    j = int(np.searchsorted(ends, s_cur, side="right"))
+    j = min(j, len(ends) - 1)
+    start_j = ends[j - 1] if j else 0.0
+    kap = [shifted_polynomial(coeffs[j], max(s_cur - start_j, 0.0), 1.0)]
+    sw = [ends[j] - s_cur]
+    for i in range(j + 1, len(ends)):
+        kap.append(coeffs[i])
+        sw.append(ends[i] - s_cur)
+    sw[-1] = math.inf
+    return j, np.array(kap, dtype=float).reshape(-1, 4), np.array(sw, dtype=float)
+
+
+def _run(params, y0, times, U, ends, coeffs, rtol, atol, dense):
+    """Integrate under ``u`` linear between ``(times, U)``; returns the final state, ``u`` there and the intervals.
+
+    Each interval is one call from its start (local time 0); the intervals keep the given
+    ``times`` as their bounds, so that consecutive ones meet exactly.
+    """
+    y = np.array(y0, dtype=float)
+    out = []
+    s_abs = 0.0
+    for k in range(times.size - 1):
+        h = times[k + 1] - times[k]
+        if not h > 0.0:
+            return None, None, out
+        alpha = (U[k + 1] - U[k]) / h
+        j, kap, sw = _legs_from(ends, coeffs, s_abs)
+        y_local = y.copy()
+        y_local[4] = 0.0
+        res = integrate_legs(params, y_local, kap, sw, alpha, h, rtol=rtol, atol=atol, dense=dense, beta=U[k])
+        if res.status != 0 or not np.all(np.isfinite(res.y)):
+            return None, None, out
+        if dense:
+            legs = []
+            for i, sol in enumerate(res.legs):
+                s0 = float(sw[i - 1]) if i else 0.0
+                legs.append(Leg(tuple(float(c) for c in kap[i]), float(res.leg_bounds[i]),
+                                float(res.leg_bounds[i + 1]), sol, s0))
+            man = ManeuverSolution(kind="plan", success=True, message="planned", params=(float(alpha), float(U[k])),
+                                   duration=float(h), legs=tuple(legs), basis="affine")
+            out.append((float(times[k]), float(times[k + 1]), man, s_abs, j))
+        y = np.array(res.y, dtype=float)
+        s_abs += y[4]
+        y[4] = s_abs
+    return y, U[-1], out
+
+
+def _end_conditions(params, y, u_end, ends, coeffs, target, L, scale_r, scale_v):
+    kap = coeffs[-1]
+    sig = y[4] - (ends[-2] if len(ends) > 1 else 0.0)
+    k_end = kap[0] + sig * (kap[1] + sig * (kap[2] + sig * kap[3]))
+    ad, bd, _ = constrained_rates(params, k_end, y[0], y[1], y[2], y[3], u_end)
+    xi2 = velocities(params, y[0], y[1], y[2], y[3], ad, bd)[1]
+    r = np.array([(y[4] - L) / L, (y[2] - target.a) / scale_r, (y[3] - target.b) / scale_r,
+                  (ad - target.adot) / scale_v, (bd - target.bdot) / scale_v, xi2])
+    return r, RestState(float(y[2]), float(y[3]), float(ad), float(bd))
+
+
+def finish_section(params: SleighParams, pieces, times, U, start: RestState, target: RestState, states=None, *,
+                   stride: int = 3, rtol: float = 1e-13, atol: float = 1e-14,
+                   residual_tol: float = _RESIDUAL_TOL, max_iter: int = 30) -> FinishedSection:
+    """Solve the planned section exactly from ``start`` to rest at ``target``, by multiple shooting.
+
+    ``times`` and ``U`` are the plan's time nodes (normalised, top speed 1) and the free control
+    there; ``pieces`` carry ``coefficients`` and ``length``; ``states`` the plan's states at the
+    nodes (masses normalised to ``M + m = 1``), the start of each shooting segment of ``stride``
+    intervals. Unknowns: a scale of the times, ``u`` at every node but the first, and the state
+    at every inner segment start; residuals: continuity between segments and the six end
+    conditions. The system is underdetermined: Gauss-Newton with least-norm steps. Never raises.
+    """
+    ends, coeffs = _pieces(pieces)
+    L = float(ends[-1])
+    tot = params.M + params.m
+    p1, p2 = rest_momenta(params, start.a, start.b, start.adot, start.bdot)
+    kap0 = coeffs[0][0]
+    from ..dynamics.model import curvature_coefficients
+    c_a, c_b, _c0 = curvature_coefficients(params, kap0, p1, p2, start.a, start.b)
+    u0 = (-c_b * start.adot + c_a * start.bdot) / math.hypot(c_a, c_b)
+    times = np.asarray(times, dtype=float)
+    N = times.size - 1
+    bounds = list(range(0, N, stride)) + [N]
+    K = len(bounds) - 1
+    y0 = np.array([p1, p2, start.a, start.b, 0.0])
+    yscale = np.array([tot, tot, 1.0, 1.0, L])
+    Uv = np.array(U, dtype=float)
+    Uv[0] = u0
+    if states is None:
+        states = np.zeros((6, N + 1))
+    Y = [np.asarray(states[:5, bounds[k]], dtype=float) * np.array([1.0, 1.0, 1.0, 1.0, 1.0 / L]) for k in range(1, K)]
+    z = np.concatenate([[1.0], Uv[1:]] + Y)
+    scale_r = max(math.hypot(target.a, target.b), params.length_scale)
+    scale_v = max(math.hypot(target.adot, target.bdot), 1.0)
+    count = 0
+
+    def unpack(z):
+        uu = np.concatenate([[u0], z[1:N + 1]])
+        ys = [y0] + [z[N + 1 + 5 * i:N + 6 + 5 * i] * yscale for i in range(K - 1)]
+        return z[0], uu, ys
+
+    def segment(k, z, dense=False):
+        nonlocal count
+        count += 1
+        sig, uu, ys = unpack(z)
+        i0, i1 = bounds[k], bounds[k + 1]
+        tt = sig * times[i0:i1 + 1]
+        y = ys[k].copy()
+        s_start = y[4]
+        y[4] = 0.0
+        ends_k = ends - s_start
+        yk, u_end, out = _run(params, y, tt, uu[i0:i1 + 1], ends_k, coeffs, rtol, atol, dense)
+        if yk is None:
+            return None, None, out
+        yk = yk.copy()
+        yk[4] += s_start
+        out = [(t0, t1, man, s0 + s_start, j) for t0, t1, man, s0, j in out]
+        return yk, u_end, out
+
+    def residual(z, only=None, cache=None):
+        sig, uu, ys = unpack(z)
+        r = []
+        ends_y = []
+        for k in range(K):
+            if cache is not None and only is not None and k not in only:
+                yk, u_end = cache[k]
+            else:
+                yk, u_end, _ = segment(k, z)
+                if yk is None:
+                    return None, None
+            ends_y.append((yk, u_end))
+            if k < K - 1:
+                r.append((yk - ys[k + 1]) / yscale)
+        fin, _end = _end_conditions(params, ends_y[-1][0], ends_y[-1][1], ends, coeffs, target, L, scale_r, scale_v)
+        r.append(fin)
+        return np.concatenate(r), ends_y
+
+    def affected(i):
+        if i == 0:
+            return None  # the time scale: every segment
+        if i <= N:
+            node = i
+            return {k for k in range(K) if bounds[k] <= node <= bounds[k + 1]}
+        seg = (i - N - 1) // 5 + 1
+        return {seg}
+
+    with np.errstate(all="ignore"):
+        r, cache = residual(z)
+        ok = r is not None
+        for _ in range(max_iter if ok else 0):
+            if np.max(np.abs(r)) <= 0.1 * residual_tol:
+                break
+            J = np.empty((r.size, z.size))
+            for i in range(z.size):
+                h = 1e-7 * max(1.0, abs(z[i]))
+                zp = z.copy()
+                zp[i] += h
+                only = affected(i)
+                rp, _c = residual(zp, only=only, cache=cache)
+                if rp is None:
+                    ok = False
+                    break
+                J[:, i] = (rp - r) / h
+            if not ok:
+                break
+            dz = np.linalg.lstsq(J, -r, rcond=None)[0]
+            step = 1.0
+            while step > 1e-3:
+                rn, cn = residual(z + step * dz)
+                if rn is not None and np.linalg.norm(rn) < np.linalg.norm(r):
+                    break
+                step *= 0.5
+            if rn is None or step <= 1e-3:
+                break
+            z, r, cache = z + step * dz, rn, cn
+    worst = float(np.max(np.abs(r))) if r is not None else math.inf
+    names = ("length", "end_a", "end_b", "end_adot", "end_bdot", "end_speed")
+    res = {k: float(v) for k, v in zip(names, r[-6:])} if r is not None else {}
+    if r is not None:
+        res["continuity"] = float(np.max(np.abs(r[:-6]))) if r.size > 6 else 0.0
+    if not worst <= residual_tol:
+        return FinishedSection(success=False, message=f"the exact finish did not converge (largest residual {worst:.3g})",
+                               intervals=(), start=start, end=target, residuals=res, nfev=count)
+    out = []
+    for k in range(K):
+        yk, u_end, seg_out = segment(k, z, dense=True)
+        out += seg_out
+    _fin, end = _end_conditions(params, yk, u_end, ends, coeffs, target, L, scale_r, scale_v)
+    return FinishedSection(success=True, message="finished exactly", intervals=tuple(out), start=start, end=end,
+                           residuals=res, nfev=count)
