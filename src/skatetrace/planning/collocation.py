@@ -96,6 +96,7 @@ class ProgramOptions:
     top_speed: float = 1.0
     tol: float = 1e-8
     max_iter: int = 1000
+    print_level: int = 0
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -278,7 +279,9 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     opti.minimize(cost)
     if guess is not None:
         _set_guess(opti, handles, guess)
-    opti.solver("ipopt", {"expand": True, "print_time": False, "ipopt.print_level": int(__import__("os").environ.get("ST_IPOPT_PRINT", "0")), "ipopt.sb": "yes",
+    # from a guess (a refined mesh, another reach) the barrier starts small: 30 iterations, not 150
+    warm = {} if guess is None else {"ipopt.mu_init": 1e-4}
+    opti.solver("ipopt", {**warm, "expand": True, "print_time": False, "ipopt.print_level": o.print_level, "ipopt.sb": "yes",
                           "ipopt.max_iter": o.max_iter, "ipopt.tol": o.tol})
     try:
         sol = opti.solve()
