@@ -75,7 +75,6 @@ def _program_options(params: SleighParams, options: TraceOptions) -> ProgramOpti
 
 
 def _rates(fn, X, spec: SectionSpec, at_end: bool):
-    from .symbolic import sleigh_functions  # noqa: F401  (fn comes from it)
     piece = spec.pieces[-1] if at_end else spec.pieces[0]
     s0 = spec.length - piece.length if at_end else 0.0
     x = X[:, -1] if at_end else X[:, 0]
