@@ -182,6 +182,7 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     f, accel, xi2f, ratesf = fn["f"], fn["accel"], fn["xi2"], fn["rates"]
     tau, C, B = _radau()
     opti = ca.Opti()
+    interval = _interval_function(fn, C, B, o)
     cost = 0
     handles = []
     prev_end = None  # (x, cf, s0) at the end of the previous section
@@ -221,28 +222,22 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
             opti.set_initial(W, 0.0)
             if x_prev_piece is not None:
                 opti.subject_to(X[:, 0] == x_prev_piece)
-            for i in range(N):
-                h = T * (frac[i + 1] - frac[i])
-                xs = [X[:, i]] + [Xc[:, _DEGREE * i + r] for r in range(_DEGREE)]
-                for r in range(1, _DEGREE + 1):
-                    xp = sum(C[q, r] * xs[q] for q in range(_DEGREE + 1))
-                    xr = xs[r]
-                    opti.subject_to(h * f(xr, W[i], cf, s_start) == xp)
-                    A = accel(xr, W[i], cf, s_start)
-                    if o.objective == "effort":
-                        cost += B[r] * h * (o.m * o.m) * ca.sumsqr(A)
-                    if o.max_accel is not None:
-                        opti.subject_to(ca.sumsqr(A) <= o.max_accel**2)
-                    v = xi2f(xr, W[i], cf, s_start)
-                    opti.subject_to(opti.bounded(0.0, v, o.top_speed))
-                    opti.subject_to(xr[2] ** 2 + xr[3] ** 2 <= reach2)
-                    if o.singular_clearance > 0.0:
-                        bs = -_kappa(cf, xr[4], s_start) * o.I / o.M
-                        opti.subject_to(xr[2] ** 2 + (xr[3] - bs) ** 2 >= o.singular_clearance**2)
-                    if o.max_rate is not None:
-                        opti.subject_to(ca.sumsqr(ratesf(xr, W[i], cf, s_start)) <= o.max_rate**2)
-                    cost += 1e-6 * B[r] * h * W[i] ** 2
-                opti.subject_to(X[:, i + 1] == xs[_DEGREE])
+            hs = T * ca.DM(np.diff(frac)).T  # (1, N) interval lengths
+            defect, quad, path = interval.map(N)(X[:, :N], ca.reshape(Xc, 6 * _DEGREE, N), W, hs, cf, s_start)
+            opti.subject_to(ca.vec(defect) == 0)
+            opti.subject_to(X[:, 1:] == Xc[:, _DEGREE - 1::_DEGREE])
+            cost += ca.sum2(quad)
+            opti.subject_to(opti.bounded(0.0, ca.vec(path[0:_DEGREE, :]), o.top_speed))
+            opti.subject_to(ca.vec(path[_DEGREE:2 * _DEGREE, :]) <= reach2)
+            row = 2 * _DEGREE
+            if o.singular_clearance > 0.0:
+                opti.subject_to(ca.vec(path[row:row + _DEGREE, :]) >= o.singular_clearance**2)
+                row += _DEGREE
+            if o.max_accel is not None:
+                opti.subject_to(ca.vec(path[row:row + _DEGREE, :]) <= o.max_accel**2)
+                row += _DEGREE
+            if o.max_rate is not None:
+                opti.subject_to(ca.vec(path[row:row + _DEGREE, :]) <= o.max_rate**2)
             if j == 0:
                 opti.subject_to(X[4, 0] == 0.0)
                 opti.subject_to(xi2f(X[:, 0], 0.0, cf, s_start) == 0.0)
@@ -311,6 +306,56 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
                            meshes=tuple(tuple(h[3]) for h in handles),
                            objective=float(sol.value(cost)), iterations=int(stats.get("iter_count", 0)), stats={
                                k: stats[k] for k in ("t_wall_total",) if k in stats})
+
+
+def _interval_function(fn, C, B, o) -> ca.Function:
+    """One collocation interval as a flat SX function, mapped over a piece's intervals.
+
+    Inputs ``(x_k, x_c (6 * degree), w, h, coefficients, s0)``; outputs the collocation defects,
+    the interval's share of the objective and the path quantities at the collocation points (rows:
+    speed ``xi2``, ``a^2 + b^2``, then as asked the squared distance from the singular point, the
+    squared acceleration and the squared rates). Building the program from one mapped function
+    keeps CasADi's derivative setup small: inlining every call cost seconds per solve.
+    """
+    f, accel, xi2f, ratesf = fn["f"], fn["accel"], fn["xi2"], fn["rates"]
+    xk = ca.SX.sym("xk", 6)
+    xc = ca.SX.sym("xc", 6 * _DEGREE)
+    w = ca.SX.sym("w")
+    h = ca.SX.sym("h")
+    cf = ca.SX.sym("cf", 4)
+    s0 = ca.SX.sym("s0")
+    xs = [xk] + [xc[6 * r:6 * r + 6] for r in range(_DEGREE)]
+    defects, quad = [], 0
+    speed, reach, sing, acc, rate = [], [], [], [], []
+    # The mass's acceleration from the collocation polynomial of its velocity (differentiated like
+    # the states'), not from the chain rule through the dynamics: a far smaller expression for
+    # IPOPT's Hessian, and the same to the mesh's accuracy (the mesh is refined against it).
+    vels = [fn["velocity"](x, w, cf, s0) for x in xs]
+    for r in range(1, _DEGREE + 1):
+        xr = xs[r]
+        xp = sum(C[q, r] * xs[q] for q in range(_DEGREE + 1))
+        defects.append(h * f(xr, w, cf, s0) - xp)
+        v_r, xi1_r = vels[r]
+        vdot = sum(C[q, r] * vels[q][0] for q in range(_DEGREE + 1)) / h
+        A = ca.vertcat(vdot[0] - xi1_r * v_r[1], vdot[1] + xi1_r * v_r[0])
+        if o.objective == "effort":
+            quad += B[r] * h * (o.m * o.m) * ca.sumsqr(A)
+        quad += 1e-6 * B[r] * h * w**2
+        speed.append(xi2f(xr, w, cf, s0))
+        reach.append(xr[2] ** 2 + xr[3] ** 2)
+        bs = -_kappa(cf, xr[4], s0) * o.I / o.M
+        sing.append(xr[2] ** 2 + (xr[3] - bs) ** 2)
+        acc.append(ca.sumsqr(A))
+        rate.append(ca.sumsqr(ratesf(xr, w, cf, s0)))
+    rows = speed + reach
+    if o.singular_clearance > 0.0:
+        rows += sing
+    if o.max_accel is not None:
+        rows += acc
+    if o.max_rate is not None:
+        rows += rate
+    return ca.Function("interval", [xk, xc, w, h, cf, s0],
+                       [ca.vertcat(*defects), quad, ca.vertcat(*rows)])
 
 
 def _link(opti, end, start, turn, ratesf, o):

@@ -10,6 +10,7 @@ functions of ``(x, w, coefficients, s0)``:
 - ``f``: the time derivative of ``x``;
 - ``accel``: the acceleration of the mass on the ice, in the blade's frame (``d/dt`` of its
   velocity ``(xi2 - xi1 b + adot, xi1 a + bdot)`` plus the frame's rotation ``xi1``);
+- ``velocity``: the mass's velocity on the ice in the blade's frame, and ``xi1``;
 - ``xi2``: the speed along the blade; ``rates``: ``(adot, bdot)``; ``gap``: the squared norm
   ``|c|^2`` of the curvature condition's coefficients, zero only at the singular point.
 """
@@ -54,4 +55,5 @@ def sleigh_functions(M: float, m: float, I: float) -> dict[str, ca.Function]:
         "xi2": ca.Function("xi2", args, [xi2], names, ["xi2"]),
         "rates": ca.Function("rates", args, [ca.vertcat(ad, bd)], names, ["rates"]),
         "gap": ca.Function("gap", args, [n2], names, ["gap"]),
+        "velocity": ca.Function("velocity", args, [v, xi1], names, ["velocity", "xi1"]),
     }
