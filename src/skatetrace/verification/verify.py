@@ -56,8 +56,8 @@ def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         return np.vstack([v[k] for k in _SAMPLED])
 
     # A planned section moves the mass fast through its rests, where the replay's momenta must
-    # cancel the mass's rates: its rates are sampled a hundred times more finely.
-    tol = dict(value_tol=1e-13, rate_tol=1e-11) if sec.glide.get("planned") else {}
+    # cancel the mass's rates: its rates are sampled a thousand times more finely.
+    tol = dict(value_tol=1e-14, rate_tol=1e-12) if sec.glide.get("planned") else {}
     spans, rows = sample_intervals(fn, sec.breakpoints(), values=True, **tol)
     v = dict(zip(_SAMPLED, rows))
     v["segment"] = v["segment"].astype(int)
