@@ -403,3 +403,42 @@ def test_first_run_says_it_compiles_once(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(compiled, "cache_is_warm", lambda: True)
     assert main(["trace", "line", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 0
     assert "compiling" not in capsys.readouterr().err and calls == [1]
+
+
+def _arc_file(tmp_path):
+    path = tmp_path / "arc.json"
+    path.write_text(json.dumps({"schema": "skatetrace.figure/1", "params": {"M": 2, "m": 1, "I": 3},
+                                "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 198}]}]}))
+    return path
+
+
+@pytest.mark.parametrize("reach, why", [("auto", "model units"), ("0.5m", "physical length"), ("-1", "positive"),
+                                        ("far", "cannot read")])
+def test_trace_reach_that_cannot_apply_is_a_usage_error(tmp_path, capsys, reach, why):
+    assert main(["trace", str(_arc_file(tmp_path)), "--reach", reach, "--out", str(tmp_path / "o")]) == 2
+    assert why in capsys.readouterr().err
+
+
+def test_trace_reach_plans_within_it_and_reports_the_cusps(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["trace", str(_arc_file(tmp_path)), "--reach", "1", "--out", str(out), "--no-plots",
+                 "--no-viewer"]) == 0
+    printed = capsys.readouterr().out
+    assert "planning the mass's motion within 1 model units" in printed and "reach" in printed
+    result = json.loads((out / "result.json").read_text())
+    assert result["options"]["reach"] == 1.0
+    rows = list(csv.DictReader((out / "controls.csv").open()))
+    assert max(np.hypot(float(r["a"]), float(r["b"])) for r in rows) <= 1.0
+    info = json.loads((out / "report.json").read_text())["feasibility"]["info"]
+    assert {"max_cusp_impulse", "max_cusp_mass_speed", "effort"} <= set(info)
+
+
+def test_trace_reach_too_small_is_answered_as_data(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["trace", str(_arc_file(tmp_path)), "--reach", "0.02", "--out", str(out), "--no-plots"]) == 1
+    printed = capsys.readouterr().out
+    assert "no motion of the mass within the reach" in printed and "on its own it plans within" in printed
+    result = json.loads((out / "result.json").read_text())
+    assert not result["success"] and (out / "report.json").exists()
+    sec = result["sections"][0]
+    assert sec["status"] == "INFEASIBLE" and 0.02 < sec["metrics"]["smallest_feasible_reach"] <= 0.1

@@ -60,3 +60,62 @@ def test_a_planned_arc_is_verified_by_the_replay(arc):
     fig, _trace = arc
     result = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
     assert result.success, result.message
+
+
+def _cusp_figure(join: dict, second: dict) -> dict:
+    return {"schema": "skatetrace.figure/1", "name": "two arcs", "params": {"M": 2, "m": 1, "I": 3},
+            "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 150}, second], "joins": [join]}]}
+
+
+#: A reversal (the blade runs back, a three turn's cusp) and a pivot of -40 degrees onto an arc the other way.
+CUSPS = {
+    "reversal": _cusp_figure({"type": "cusp", "pivot_deg": 0, "reverse": True},
+                             {"type": "arc", "radius": 1.2, "sweep_deg": 150}),
+    "pivot": _cusp_figure({"type": "cusp", "pivot_deg": -40}, {"type": "arc", "radius": 1.5, "sweep_deg": -120}),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(CUSPS))
+def through_a_cusp(request):
+    fig = figure_from_dict(CUSPS[request.param])
+    return fig, st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
+
+
+def test_a_planned_cusp_is_exact_verified_and_keeps_the_mass_in_place(through_a_cusp):
+    fig, result = through_a_cusp
+    assert result.success, result.message
+    first, second = result.trace.sections
+    for sec in (first, second):
+        assert max(sec.residuals.values()) <= 1e-10
+        assert sec.metrics["reach"] <= 1.0
+    assert first.metrics["link"] == "start" and second.metrics["link"] == "impulse"
+    checks = {c.name: c for c in result.feasibility.checks}
+    size = result.report.figure_size
+    # measured independently on the exported rows: the mass's position on the ice does not jump
+    # at the cusp (the blade turns under it), and its velocity jumps by the impulse the planner reports
+    assert checks["cusp_jump"].value <= 1e-9 * size
+    assert checks["reach"].value <= 1.0
+    info = result.feasibility.info
+    assert info["max_cusp_impulse"] == pytest.approx(second.metrics["link_impulse"], rel=1e-6, abs=1e-9)
+    assert info["max_cusp_mass_speed"] > 0.0
+
+
+def test_the_planned_effort_is_below_the_launch_glide_stop_one():
+    fig = figure_from_dict(CUSPS["reversal"])
+    planned = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
+    today = st.trace_and_verify(fig)
+    assert planned.success and today.success
+    assert planned.feasibility.info["effort"] < today.feasibility.info["effort"]
+    # and the reach it was asked for, where today's manoeuvres put the mass metres away
+    reach = {c.name: c.value for c in today.feasibility.checks}["reach"]
+    assert reach > 2.0
+
+
+def test_the_default_reach_is_the_trunk_length():
+    from skatetrace.dynamics.presets import REACH_PER_HEIGHT, skater_reach
+
+    assert skater_reach(1.7) == pytest.approx(REACH_PER_HEIGHT * 1.7)
+    assert 0.45 < skater_reach(1.7) < 0.5  # inside the feasibility check's 0.5 x height
+    for bad in (0.0, -1.7, math.nan, "tall"):
+        with pytest.raises(ValueError, match="height"):
+            skater_reach(bad)

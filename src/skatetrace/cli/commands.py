@@ -18,6 +18,7 @@ from ..dynamics.model import SleighParams
 from ..figures.patterns import pattern, pattern_names
 from ..drawings.sources import DRAWING_SUFFIXES
 from ..pipeline import REST_POLICIES
+from ..dynamics.presets import REACH_PER_HEIGHT
 from ..tracing.sections import TraceOptions
 
 __all__ = ["build_parser", "main"]
@@ -42,6 +43,41 @@ def _add_source_args(t) -> None:
     s.add_argument("--edge", default="outside", help="outside or inside (default outside)")
     s.add_argument("--direction", default="forward", help="forward or backward (default forward)")
     s.add_argument("--foot", default="right", help="right or left (default right)")
+
+
+def _add_planner_args(t) -> None:
+    g = t.add_argument_group("bounded-reach planning (controls a skater could make)")
+    g.add_argument("--reach", default="none",
+                   help="keep the moving mass within this distance of the blade's contact point, e.g. 0.5m (or 0.5 "
+                        "in the figure's units), and plan its motion (CasADi/IPOPT, then finished exactly; "
+                        "20-100 s for a school figure); 'auto' for figures in metres: "
+                        f"{REACH_PER_HEIGHT:g} x --height, the trunk's length; default none: the launch-glide-stop "
+                        "manoeuvres")
+    g.add_argument("--objective", choices=("effort", "time"), default="effort",
+                   help="what the planner minimises: effort (the squared force on the mass, at the glide speed's "
+                        "pace; default) or time (needs --max-accel)")
+    g.add_argument("--max-accel", type=float,
+                   help="largest acceleration of the mass on the ice (figure units per s^2, e.g. m/s^2)")
+
+
+def _reach(args, unit: str) -> float | None:
+    """``--reach`` in the figure's units: a length, ``auto`` (from ``--height``) or ``none``."""
+    from ..drawings.lengths import parse_length
+    from ..dynamics.presets import skater_reach
+
+    word = args.reach.strip().lower()
+    if word == "none":
+        return None
+    if word == "auto":
+        if unit != "m":
+            raise SkatetraceError("--reach auto derives the reach from --height, for figures in metres; this figure "
+                                  "is in model units: give a number (model units) or 'none'")
+        return skater_reach(args.height)
+    value, given = parse_length(args.reach)
+    if given == "m" and unit != "m":
+        raise SkatetraceError(f"--reach {args.reach!r} is a physical length but the figure is in model units: give "
+                              "a plain number (model units), or 'none'")
+    return value
 
 
 def _version() -> str:
@@ -99,6 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "(at every smooth join); default auto")
     t.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     t.add_argument("--no-viewer", action="store_true", help="skip viewer.html (the self-contained HTML viewer)")
+    _add_planner_args(t)
     _add_source_args(t)
     f = sub.add_parser("fit", help="fit a drawing by arcs and lines (and, with --exact, curvature splines) "
                                    "without tracing: pieces, certified tolerance, plot")
@@ -231,6 +268,9 @@ def _print_feasibility(done) -> None:
     print(f"  peak force on the mass {info['peak_force_on_mass']:.3g} {info['force_unit']} (limit "
           f"{info['force_limit']:.3g}), peak mass kinetic energy {info['peak_mass_kinetic_energy']:.3g} "
           f"{info['energy_unit']}")
+    print(f"  at the cusps: mass speed up to {info['max_cusp_mass_speed']:.3g} relative to the stopped blade, velocity "
+          f"jump up to {info['max_cusp_impulse']:.3g} {info['impulse_unit']} (impulse); effort (integral of the squared "
+          f"force) {info['effort']:.4g}")
     if not f.feasible:
         print(f"skatetrace: warning: {done.verdict}", file=sys.stderr)
 
@@ -258,7 +298,11 @@ def _trace(args) -> int:
     params = SleighParams(M=args.M if args.M is not None else base.M, m=args.m if args.m is not None else base.m,
                           I=args.I if args.I is not None else base.I)
     speed = args.speed if args.speed is not None else (2.0 if res.unit == "m" else 1.0)
-    options = TraceOptions(speed=speed)
+    options = TraceOptions(speed=speed, reach=_reach(args, res.unit), objective=args.objective,
+                           max_accel=args.max_accel)
+    if options.reach is not None:
+        print(f"note: planning the mass's motion within {options.reach:.4g} {res.unit if res.unit == 'm' else 'model units'} "
+              f"of the blade for least {options.objective} (--reach none: the launch-glide-stop manoeuvres)")
     for note in res.notes:
         print(f"note: {note}")
     _compile_once()
@@ -295,13 +339,21 @@ def _trace(args) -> int:
     unit = "m" if res.unit == "m" else "model units"
     print(f"figure {figure.name}: {len(figure.curves)} curve(s), {len(trace.sections)} section(s), "
           f"M={params.M:g} m={params.m:g} I={params.I:g} ({'SI: kg, kg m^2, m, s' if res.unit == 'm' else 'model units'})")
-    print(f"{'section':>7} {'pieces':>14} {'length':>9} {'duration':>9} {'max residual':>13} {'status':>8}")
+    planned = options.reach is not None
+    extra = f" {'reach':>9} {'link':>10} {'impulse':>9}" if planned else ""
+    print(f"{'section':>7} {'pieces':>14} {'length':>9} {'duration':>9} {'max residual':>13}{extra} {'status':>8}")
     for i, s in enumerate(trace.sections):
         resid = max(s.residuals.values()) if s.residuals else float("nan")
         pcs = ",".join(str(p.index) for p in s.section.pieces)
         if len(pcs) > 14:
             pcs = pcs[:6] + ".." + pcs[-6:]
-        print(f"{i:>7} {pcs:>14} {s.length:>9.4f} {s.duration:>9.4f} {resid:>13.2e} {'ok' if s.success else 'FAILED':>8}")
+        extra = ""
+        if planned:
+            m = s.metrics or {}
+            extra = (f" {m.get('reach', float('nan')):>9.4f} {m.get('link', '-'):>10} "
+                     f"{m.get('link_impulse', float('nan')):>9.3g}")
+        print(f"{i:>7} {pcs:>14} {s.length:>9.4f} {s.duration:>9.4f} {resid:>13.2e}{extra} "
+              f"{'ok' if s.success else 'FAILED':>8}")
         if not s.success:
             print(f"        reason: {s.message}")
     for c in figure.curves:

@@ -28,7 +28,8 @@ import math
 
 from .model import SleighParams
 
-__all__ = ["PAPER_PARAMS", "SEGMENT_MASS_FRACTIONS", "MOVING_FRACTION", "TRUNK_RADIUS_PER_HEIGHT", "skater_params"]
+__all__ = ["PAPER_PARAMS", "SEGMENT_MASS_FRACTIONS", "MOVING_FRACTION", "TRUNK_RADIUS_PER_HEIGHT", "REACH_PER_HEIGHT",
+           "skater_params", "skater_reach"]
 
 PAPER_PARAMS = SleighParams(M=2.0, m=1.0, I=3.0)
 """The paper's parameters ``M = 2, m = 1, I = 3`` (dimensionless, length scale 1)."""
@@ -46,6 +47,25 @@ MOVING_FRACTION = (2 * SEGMENT_MASS_FRACTIONS["arm"] + SEGMENT_MASS_FRACTIONS["l
 #: Radius of the cylinder standing for the sleigh (trunk and skating leg) per unit of height:
 #: 0.15 m for a skater 1.7 m tall, about half the width of the hips.
 TRUNK_RADIUS_PER_HEIGHT = 0.15 / 1.7
+
+
+#: The planner's default reach per unit of height: the length of the trunk, from the hip to the
+#: shoulder (0.818 H - 0.530 H = 0.288 H in Drillis and Contini's segment proportions, as tabulated
+#: in Winter's anthropometry chapter). The moving mass (arms, free leg, head) then stays within the
+#: trunk's length of the skating leg: a comfortable range, well inside the 0.5 H beyond which the
+#: feasibility check (:mod:`skatetrace.verification.feasibility`) calls a motion impossible.
+REACH_PER_HEIGHT = 0.288
+
+
+def skater_reach(height: float = 1.7) -> float:
+    """The planner's default reach in m for a skater ``height`` m tall (:data:`REACH_PER_HEIGHT` x height).
+
+    >>> round(skater_reach(1.7), 3)
+    0.49
+    """
+    if not (_is_number(height) and math.isfinite(height) and height > 0):
+        raise ValueError(f"height must be a positive length in m, got {height!r}")
+    return REACH_PER_HEIGHT * float(height)
 
 
 def skater_params(body_mass: float = 60.0, height: float = 1.7, *, moving_fraction: float = MOVING_FRACTION,

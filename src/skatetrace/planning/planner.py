@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ..dynamics.model import SleighParams, curvature_coefficients
+from ..dynamics.model import SleighParams
 from ..figures.figure import Figure
 from ..figures.geometry import end_pose
 from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceStatus, _Phase, _with_metrics
@@ -69,7 +69,11 @@ def _program_options(params: SleighParams, options: TraceOptions) -> ProgramOpti
         objective=options.objective,
         max_accel=None if options.max_accel is None else options.max_accel / v2,
         max_rate=None if options.max_mass_speed is None else options.max_mass_speed / options.speed,
-        singular_clearance=0.15 * options.reach, continuous_velocity=False, impulse_time=0.1,
+        # The mass's velocity may jump at a cusp, the impulse penalised as the effort of delivering it
+        # within impulse_time: held continuous instead (school three at 0.49 m), the program moved the
+        # same change of momentum into the few milliseconds after the cusp, where its mesh does not see
+        # the effort (312 m/s^2, 6.4 kN in the exact motion, against 42 m/s^2 with the penalty).
+        singular_clearance=0.15 * options.reach, continuous_velocity=False, impulse_time=0.1, tol=1e-6,
         top_speed=TOP_SPEED,
     )
 
@@ -81,55 +85,86 @@ def _rates(fn, X, spec: SectionSpec, at_end: bool):
     return np.asarray(fn["rates"](x, 0.0, list(piece.coefficients), s0)).ravel()
 
 
-def _warm_start(specs, popts) -> ProgramSolution | None:
-    """Sections one after another, each from where the previous left the mass (else free)."""
-    from .symbolic import sleigh_functions
-    fn = sleigh_functions(popts.M, popts.m, popts.I)
-    sols = []
-    end = None
-    for spec in specs:
-        sol = None
-        if end is not None:
-            c, s = math.cos(spec.turn), math.sin(spec.turn)
-            pos = (c * end[0] - s * end[1], s * end[0] + c * end[1])
-            sol = solve_program([dataclasses.replace(spec, turn=0.0)], dataclasses.replace(popts, start_position=pos))
-            if not sol.success:
-                sol = None
-        if sol is None:
+def _warm_start(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None]:
+    """Every section on its own, from a launch-glide-stop guess: the start of the linked program.
+
+    Sections with the same pieces share one solve (school figures repeat theirs). Returns the
+    guess, or None and the index of the first section that has no plan on its own.
+    """
+    solved: dict = {}
+    for k, spec in enumerate(specs):
+        if spec.pieces not in solved:
             sol = solve_program([dataclasses.replace(spec, turn=0.0)], popts)
-        if not sol.success:
-            return None
-        sols.append(sol)
-        end = sol.states[0][2:4, -1]
+            if not sol.success:
+                return None, k
+            solved[spec.pieces] = sol
+    sols = [solved[spec.pieces] for spec in specs]
     return ProgramSolution(success=True, status="warm start", message="warm start",
                            times=tuple(s.times[0] for s in sols), states=tuple(s.states[0] for s in sols),
-                           controls=tuple(s.controls[0] for s in sols))
+                           controls=tuple(s.controls[0] for s in sols), meshes=tuple(s.meshes[0] for s in sols)), None
+
+
+#: Reaches tried, as multiples of the one asked for, to tell a user what would do instead.
+_LARGER_REACHES = (1.5, 2.0, 3.0, 5.0)
+
+
+def smallest_reach(spec: SectionSpec, popts: ProgramOptions) -> float | None:
+    """The smallest of a few larger reaches (:data:`_LARGER_REACHES`) within which ``spec`` plans on its own.
+
+    In the program's units (``popts.reach`` is the reach asked for, already inside the margin);
+    None if none of them does.
+    """
+    for factor in _LARGER_REACHES:
+        wider = dataclasses.replace(popts, reach=popts.reach * factor, singular_clearance=popts.singular_clearance * factor)
+        if solve_program([dataclasses.replace(spec, turn=0.0)], wider).success:
+            return popts.reach * factor
+    return None
 
 
 #: Largest defect of a collocation interval against the exact integration (relative, see
-#: :mod:`skatetrace.planning.mesh`) before the plan is handed to the exact finish.
+#: :mod:`skatetrace.planning.mesh`) before the plan is handed to the exact finish, and the rounds
+#: of refinement allowed to reach it.
 _MESH_TOL = 1e-5
-_MESH_ROUNDS = 5
+_MESH_ROUNDS = 2
 
 
-def _refine(plan: ProgramSolution, specs, popts) -> ProgramSolution:
-    """Halve the intervals whose defect exceeds ``_MESH_TOL`` and solve again, a few rounds at most."""
+def _refine(plan: ProgramSolution, specs, popts: ProgramOptions) -> ProgramSolution:
+    """Split the intervals whose defect exceeds ``_MESH_TOL`` and solve again, a few rounds at most."""
     for _ in range(_MESH_ROUNDS):
         errors = interval_errors(plan, specs, popts.M, popts.m, popts.I, popts.reach)
         if max(float(np.max(e)) for e in errors) <= _MESH_TOL:
             break
         meshes, guess, _n = refined(plan, errors, _MESH_TOL)
-        again = solve_program(specs, popts, guess=guess, meshes=meshes)
+        again = solve_program(specs, dataclasses.replace(popts, mu_init=1e-4), guess=guess, meshes=meshes)
         if not again.success:
             break
         plan = again
     return plan
 
 
+def _plan_curve(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None]:
+    """The curve as one program from the sections planned on their own, its mesh then refined.
+
+    Returns the plan, or None and the index of a section that has no plan on its own.
+    """
+    guess, bad = _warm_start(specs, popts)
+    if guess is None or len(specs) == 1:
+        return (None, bad) if guess is None else (_refine(guess, specs, popts), None)
+    linked = dataclasses.replace(popts, barrier="monotone")
+    plan = solve_program(specs, linked, guess=guess)
+    return (_refine(plan, specs, linked) if plan.success else plan), None
+
+
 def plan_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
                 progress=None) -> FigureTrace:
     """Plan and finish exactly every section of ``figure`` with the mass within ``options.reach``.
 
+    Each curve is one program (:func:`_plan_curve`); each section is then finished exactly from
+    the exact end of the one before, the mass's position on the ice carried through the cusp
+    (turned by its pivot or reversal) and, where the program made it continuous, its velocity.
+    Each section's ``metrics`` say how it meets the one before: ``link`` (``"start"`` for a
+    curve's first section, ``"continuous"`` or ``"impulse"``), the impulse on the mass in N s
+    (``link_impulse``) and the jump of its position (``link_jump``, zero up to round-off).
     Never raises for a figure that cannot be planned: the sections that fail say why.
     """
     if options.reach is None:
@@ -140,40 +175,101 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     fn = sleigh_functions(popts.M, popts.m, popts.I)
     traces, starts, t = [], [], 0.0
     total = sum(len(c.sections()) for c in figure.curves)
-    done = 0
     for ci, curve in enumerate(figure.curves):
         specs, sections = curve_specs(curve)
-        guess = _warm_start(specs, popts)
-        plan = solve_program(specs, popts, guess=guess) if guess is not None else None
-        plan = _refine(plan, specs, popts) if plan is not None and plan.success else plan
-        prev_target = None
-        for k, (spec, sec) in enumerate(zip(specs, sections)):
-            if plan is None or not plan.success:
-                why = ("no motion of the mass within the reach was found for a section on its own"
-                       if plan is None else f"the planner did not converge ({plan.message})")
-                tr = _failed(sec, ci, params, options, TraceStatus.INFEASIBLE,
-                             f"reach {options.reach:.4g}: {why}")
-            else:
-                X, times, W = plan.states[k], plan.times[k], plan.controls[k]
-                r0 = _rates(fn, X, spec, False)
-                r1 = _rates(fn, X, spec, True)
-                if prev_target is None:
-                    start = RestState(float(X[2, 0]), float(X[3, 0]), float(r0[0]), float(r0[1]))
-                else:
-                    moved = prev_target.turned(spec.turn)
-                    start = RestState(moved.a, moved.b, float(r0[0]), float(r0[1]))
-                target = RestState(float(X[2, -1]), float(X[3, -1]), float(r1[0]), float(r1[1]))
-                fin = finish_section(params, spec.pieces, times, X[5], start, target, X,
-                                     rtol=options.rtol, atol=options.atol)
-                tr = _section_trace(fin, sec, ci, params, options, spec)
-                prev_target = fin.end if fin.success else target
+        curve_opts = popts
+        plan, bad = _plan_curve(specs, curve_opts)
+        link = "continuous" if popts.continuous_velocity else "impulse"
+        if plan is None:
+            curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, popts)
+        else:
+            curve_traces = _finish_curve(plan, link, specs, sections, ci, params, options, fn)
+        for _ in range(_MARGIN_ROUNDS):
+            # The exact motion strays from the plan by the collocation's error: where it leaves the
+            # reach, plan again inside a reach shrunk by the excess (the plan as the guess).
+            worst = max((tr.metrics.get("reach", 0.0) for tr in curve_traces if tr.metrics), default=0.0)
+            if plan is None or not plan.success or not worst > options.reach:
+                break
+            shrunk = dataclasses.replace(curve_opts, reach=curve_opts.reach * options.reach / worst * 0.99)
+            again = solve_program(specs, dataclasses.replace(shrunk, barrier="monotone", mu_init=1e-4), guess=plan,
+                                  meshes=plan.meshes)
+            if not again.success:
+                break
+            plan, curve_opts = again, shrunk
+            curve_traces = _finish_curve(plan, link, specs, sections, ci, params, options, fn)
+        for tr in curve_traces:
             traces.append(tr)
             starts.append(t)
             t += tr.duration if tr.phases else 0.0
-            done += 1
             if progress is not None:
-                progress(done, total)
+                progress(len(traces), total)
     return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))
+
+
+#: Rounds of planning again inside a smaller reach when the exact motion leaves it.
+_MARGIN_ROUNDS = 2
+#: Collocation intervals per shooting segment of the exact finish, longest first: over long
+#: segments the integration's round-off, grown by the sleigh's instability, holds the continuity
+#: residuals near 1e-9 (circle eight at 3); shorter ones reach 1e-10.
+_STRIDES = (2, 1)
+
+
+def _finish_curve(plan, link, specs, sections, ci, params, options, fn) -> list[SectionTrace]:
+    """Each section of a planned curve finished exactly from the exact end of the one before."""
+    out = []
+    arrived = None  # the exact end of the previous section, in this section's frame
+    for k, (spec, sec) in enumerate(zip(specs, sections)):
+        if arrived is not None:
+            arrived = arrived.turned(spec.turn)
+        if not plan.success:
+            out.append(_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED,
+                               f"reach {options.reach:.4g}: IPOPT found no plan of the whole curve ({plan.message}), "
+                               "although each section has one on its own"))
+            continue
+        X, times = plan.states[k], plan.times[k]
+        r0, r1 = _rates(fn, X, spec, False), _rates(fn, X, spec, True)
+        planned = RestState(float(X[2, 0]), float(X[3, 0]), float(r0[0]), float(r0[1]))
+        kind = "start" if arrived is None else link
+        start = {"start": planned, "continuous": arrived,
+                 "impulse": dataclasses.replace(planned, a=arrived.a, b=arrived.b) if arrived else None}[kind]
+        target = RestState(float(X[2, -1]), float(X[3, -1]), float(r1[0]), float(r1[1]))
+        for stride in _STRIDES:
+            fin = finish_section(params, spec.pieces, times, X[5], start, target, X, stride=stride,
+                                 rtol=options.rtol, atol=options.atol)
+            if fin.success:
+                break
+        out.append(_section_trace(fin, sec, ci, params, options, spec, _link_metrics(kind, arrived, start, params,
+                                                                                     options)))
+        arrived = fin.end if fin.success else None
+    return out
+
+
+def _infeasible_curve(specs, sections, bad: int, ci, params, options, popts) -> list[SectionTrace]:
+    """Every section of a curve failed, the one without a plan of its own saying which reach would do."""
+    wider = smallest_reach(specs[bad], popts)
+    scale = options.reach / popts.reach  # the program's reach is inside the margin
+    hint = (f"; on its own it plans within {wider * scale:.4g}" if wider is not None else
+            f"; on its own it plans within none of {', '.join(f'{f * options.reach:.4g}' for f in _LARGER_REACHES)}")
+    out = []
+    for k, sec in enumerate(sections):
+        msg = (f"reach {options.reach:.4g}: no motion of the mass within the reach traces this section{hint}"
+               if k == bad else f"reach {options.reach:.4g}: not planned, section {bad} of this curve has no motion "
+                                f"within the reach")
+        tr = _failed(sec, ci, params, options, TraceStatus.INFEASIBLE, msg)
+        if k == bad:
+            tr = dataclasses.replace(tr, metrics={"smallest_feasible_reach": None if wider is None else wider * scale})
+        out.append(tr)
+    return out
+
+
+def _link_metrics(link: str, arrived: RestState | None, start: RestState, params: SleighParams,
+                  options: TraceOptions) -> dict:
+    """How the section meets the previous one: the kind, the impulse on the mass (N s) and the jump of its position."""
+    if arrived is None:
+        return {"link": link, "link_impulse": 0.0, "link_jump": 0.0}
+    dv = math.hypot(start.adot - arrived.adot, start.bdot - arrived.bdot) * options.speed
+    return {"link": link, "link_impulse": float(params.m * dv),
+            "link_jump": float(math.hypot(start.a - arrived.a, start.b - arrived.b))}
 
 
 def _failed(sec, ci, params, options, status, message) -> SectionTrace:
@@ -182,7 +278,7 @@ def _failed(sec, ci, params, options, status, message) -> SectionTrace:
                                                     "kappa": math.nan, "speed": options.speed})
 
 
-def _section_trace(fin, sec, ci, params, options, spec) -> SectionTrace:
+def _section_trace(fin, sec, ci, params, options, spec, link: dict) -> SectionTrace:
     if not fin.success:
         return _failed(sec, ci, params, options, TraceStatus.RESIDUAL, fin.message)
     phases = tuple(_Phase("plan", t0, t1, man, s0, 0.0, j) for t0, t1, man, s0, j in fin.intervals)
@@ -194,7 +290,7 @@ def _section_trace(fin, sec, ci, params, options, spec) -> SectionTrace:
                          residuals=residuals, nfev=fin.nfev)
     trace = _with_metrics(trace, _singular_distance(trace), options)
     reach = _certified_reach(trace)
-    metrics = dict(trace.metrics, reach=reach)
+    metrics = dict(trace.metrics, reach=reach, **link)
     if trace.success and reach > options.reach:
         return dataclasses.replace(trace, success=False, status=TraceStatus.INFEASIBLE, metrics=metrics,
                                    message=f"the exact motion reaches {reach:.4g} > reach {options.reach:.4g}")

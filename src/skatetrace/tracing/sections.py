@@ -46,6 +46,7 @@ class TraceStatus(Enum):
     RESIDUAL = "boundary conditions not met to the required tolerance"
     EXCURSION = "the mass would have to move implausibly far or the blade stall inside the section"
     INFEASIBLE = "no motion of the mass within the reach traces the section"
+    NOT_PLANNED = "the planner did not converge on the curve"
 
 
 #: Accepted glide speeds (model length per time unit, or m/s).

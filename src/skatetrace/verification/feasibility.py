@@ -57,6 +57,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.integrate import trapezoid
 
 from ..dynamics.controls import ControlSchedule
 from ..dynamics.model import SleighParams, mass_energy, mass_velocity
@@ -392,6 +393,8 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
     size = max(float(np.ptp(x)) if n else 0.0, float(np.ptp(y)) if n else 0.0, 1e-300)
     jumps = np.zeros(n)
     dv = np.zeros(n)
+    dv_cusp = np.zeros(n)
+    cusp_speed = 0.0
     curve_of = np.array([s.curve_index for s in trace.sections], dtype=int)
     for i in cut:
         j = i - 1
@@ -399,6 +402,8 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
         if sec[i] != sec[j]:
             if same_place and curve_of[sec[i]] == curve_of[sec[j]]:
                 jumps[i] = math.hypot(X[i] - X[j], Y[i] - Y[j])
+                dv_cusp[i] = math.hypot(VX[i] - VX[j], VY[i] - VY[j])
+                cusp_speed = max(cusp_speed, math.hypot(adot[i], bdot[i]), math.hypot(adot[j], bdot[j]))
         else:
             dv[i] = math.hypot(VX[i] - VX[j], VY[i] - VY[j])
     add("cusp_jump", "mass jumps {value} on the ice at a cusp", jumps, limits.cusp_jump, L)
@@ -419,6 +424,13 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
             "peak_force_on_mass": float(params.m * np.max(acc)) if n else 0.0,
             "force_limit": float(params.m * limits.mass_acceleration), "force_unit": F,
             "max_mass_velocity_jump_at_join": float(np.max(dv)) if n else 0.0, "glide_speed": glide,
+            # at the cusps: the jump of the mass's velocity on the ice as an impulse (momentum), and
+            # the mass's speed relative to the stopped blade (it carries the angular momentum there)
+            "max_cusp_impulse": float(params.m * np.max(dv_cusp)) if n else 0.0,
+            "max_cusp_mass_speed": float(cusp_speed), "impulse_unit": "N s" if limits.unit == "m" else "model units",
+            # the least-effort planner's objective, measured on the rows: the integral of |m acc|^2
+            "effort": float(params.m ** 2 * sum(trapezoid(acc[i0:i1] ** 2, t[i0:i1]) for i0, i1 in zip(
+                np.concatenate([[0], cut]), np.concatenate([cut, [n]])) if i1 - i0 >= 2)) if n else 0.0,
             "rows": n}
     failed = [c for c in checks if not c.passed]
     if n == 0:
