@@ -123,3 +123,13 @@ def test_run_all_smoke(tmp_path, capsys):
                 assert lines[j].replace("\\|", "").count("|") == n, lines[j]
                 j += 1
     assert "wrote" in capsys.readouterr().out
+
+
+def test_bench_planning_on_the_paper_arc(capsys):
+    bench = _load("bench_planning")
+    rows = bench.main(["paper-arc", "--markdown"])
+    row = rows[0]
+    assert row["verified"] and row["residual"] <= 1e-10
+    assert row["reach_after"] <= 1.0 < row["reach_before"]
+    out = capsys.readouterr().out
+    assert "| paper-arc |" in out and "x flower" in out

@@ -243,3 +243,13 @@ def test_cli_warns_and_writes_both_verdicts(tmp_path, capsys):
     assert 'class="badge warn"' in html and "not humanly feasible" in html
     assert "⚠ beyond" in html and "feasible: reach" in html
 
+
+
+def test_effort_integrates_the_squared_force_between_jumps():
+    from skatetrace.verification.feasibility import _effort
+
+    t = np.concatenate([np.linspace(0.0, 1.0, 101), np.linspace(1.0, 3.0, 201)])  # a jump at t = 1
+    acc = np.where(np.arange(t.size) < 101, 3.0, 0.5)
+    cut = np.flatnonzero(np.diff(t) <= 0.0) + 1
+    # (2 * 3)^2 over one second, (2 * 0.5)^2 over two: the jump itself adds nothing
+    assert _effort(2.0, t, acc, cut) == pytest.approx(36.0 + 2.0, rel=1e-12)
