@@ -203,3 +203,19 @@ def test_a_time_outside_the_clock_is_refused_not_clamped(playback, tmp_path, whe
     # the ends themselves are frames
     assert render_rgb(playback, t1, SMALL).shape == (240, 320, 3)
     assert render_rgb(playback, t0, SMALL).shape == (240, 320, 3)
+
+
+def test_the_planners_reach_is_drawn_around_the_blade(playback):
+    import dataclasses
+
+    t = playback.t[0] + 0.4 * (playback.t[-1] - playback.t[0])
+    plain = render_rgb(playback, t, SMALL)
+    planned = dataclasses.replace(playback, summary={**playback.summary, "reach": 0.5})
+    fig = render_frame(planned, t, SMALL)
+    circles = [p for p in fig.axes[0].patches if isinstance(p, matplotlib.patches.Circle)]
+    assert len(circles) == 1 and circles[0].get_radius() == 0.5
+    # centred on the contact point at that time
+    m = animation._Motion(planned)
+    x, y = (float(v[0]) for v in m.pose(np.array([t]))[:2])
+    assert circles[0].center == pytest.approx((x, y))
+    assert (np.any(render_rgb(planned, t, SMALL) != plain, axis=2)).sum() > 50  # and it shows

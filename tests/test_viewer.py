@@ -448,3 +448,38 @@ def test_hostile_name_shows_as_text(browser, tmp_path):
         o.assert_clean()
     finally:
         o.page.close()
+
+
+def test_the_planners_reach_is_a_circle_around_the_blade(browser, tmp_path):
+    pb = synthetic()
+    pb = dataclasses.replace(pb, summary={**pb.summary, "reach": 0.6})
+    o = Opened(browser, write_viewer(pb, tmp_path / "reach.html", max_samples=500))
+    try:
+        o.assert_clean()
+        # inside the skate's group, centred on the contact point: it moves and turns with the blade
+        r = float(o.page.eval_on_selector("#skate #reach", "c => c.getAttribute('r')"))
+        blade = o.page.eval_on_selector("#skate .blade", "l => [l.getAttribute('x1'), l.getAttribute('x2')]")
+        assert r > 0 and o.page.eval_on_selector("#skate #reach", "c => [c.getAttribute('cx'), c.getAttribute('cy')]") == ["0", "0"]
+        assert "reach" in o.page.text_content("body") and float(blade[1]) > float(blade[0])
+        # scaled like the mass's offset: at the start the mass sits at |(a, b)| = 0.2 from the contact point
+        sx, sy = (float(v) for v in o.skate()[:2])
+        mx, my = (float(v) for v in o.page.eval_on_selector("#mass", "c => [c.getAttribute('cx'), c.getAttribute('cy')]"))
+        assert r / math.hypot(mx - sx, my - sy) == pytest.approx(0.6 / math.hypot(pb.a[0], pb.b[0]), rel=0.02)
+    finally:
+        o.page.close()
+    plain = Opened(browser, write_viewer(synthetic(), tmp_path / "plain.html", max_samples=500))
+    try:
+        assert plain.page.query_selector("#reach") is None  # no planner, no circle
+    finally:
+        plain.page.close()
+
+
+def test_the_cusps_are_reported_beside_the_feasibility_checks():
+    from skatetrace.outputs.viewer import _feasibility_rows
+
+    rows = _feasibility_rows({"checks": [], "status": "feasible", "feasible": True, "info": {
+        "peak_force_on_mass": 854.0, "force_unit": "N", "max_cusp_mass_speed": 4.6, "max_cusp_impulse": 35.9,
+        "impulse_unit": "N s"}})
+    shown = {r["name"]: r["value"] for r in rows}
+    assert shown["peak force on the mass"] == "854 N" and shown["impulse on the mass at a cusp"] == "35.9 N s"
+    assert shown["mass speed at a cusp (relative to the stopped blade)"] == "4.6"

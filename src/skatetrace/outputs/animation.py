@@ -31,6 +31,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
+from matplotlib.patches import Circle
 from PIL import Image
 
 from ..errors import SkatetraceError
@@ -286,7 +287,8 @@ class _Scene:
             ax.plot(xs, ys, "-", color=_TARGET, lw=4.5 * k, solid_capstyle="round", zorder=1)
         ax.plot(pb.rests[0], pb.rests[1], "o", mfc="white", mec=_REST, mew=1.0 * k, ms=5.5 * k, zorder=3)
         unit = "m" if pb.unit == "m" else "model units"
-        ax.text(0.015, 0.012, f"grey: target   blue: blade   orange: mass   circles: rests ({unit})",
+        reach = "   dashed: reach" if isinstance(pb.summary.get("reach"), (int, float)) else ""
+        ax.text(0.015, 0.012, f"grey: target   blue: blade   orange: mass   circles: rests{reach} ({unit})",
                 transform=ax.transAxes, fontsize=7.5 * k, color="0.45", ha="left", va="bottom")
         # moving
         self.trace_t, self.trace_x, self.trace_y = m.trace_path(_TRACE_SAMPLES)
@@ -297,6 +299,13 @@ class _Scene:
         self.trail_rgba = np.tile(to_rgba(_MASS), (_TRAIL_SAMPLES - 1, 1))
         self.trail_alpha = np.linspace(0.0, 0.85, _TRAIL_SAMPLES - 1) ** 1.5
         self.link, = ax.plot([], [], "-", color=_LINK, lw=0.9 * k, zorder=4)
+        # the planner's reach: a dashed circle around the contact point that the mass stays inside
+        reach = pb.summary.get("reach")
+        self.reach = None
+        if isinstance(reach, (int, float)) and math.isfinite(reach) and reach > 0:
+            self.reach = Circle((0.0, 0.0), float(reach), fill=False, ls=(0, (4, 3)), lw=1.0 * k, color=_MASS,
+                                alpha=0.7, zorder=4)
+            ax.add_patch(self.reach)
         self.mass, = ax.plot([], [], "o", color=_MASS, ms=10 * k, mec="0.15", mew=0.8 * k, zorder=6)
         self.skate, = ax.plot([], [], "-", color=_SKATE, lw=3.2 * k, solid_capstyle="butt", zorder=7)
         self.toe, = ax.plot([], [], "o", color=_TOE, ms=3.6 * k, mec="none", zorder=8)
@@ -304,7 +313,8 @@ class _Scene:
         self.clock = ax.text(0.015, 0.985, "", ha="left", **text)
         self.section = ax.text(0.985, 0.985, "", ha="right", **text)
         self.moving = sorted([self.trace, self.passed, self.trail, self.link, self.mass, self.skate, self.toe,
-                              self.clock, self.section], key=lambda a: a.get_zorder())
+                              self.clock, self.section] + ([self.reach] if self.reach is not None else []),
+                             key=lambda a: a.get_zorder())
         # 4% of the figure, but never shorter than 3% of the picture (the mass may roam far from the figure)
         self.half = 0.5 * max(_SKATE_FRACTION * _figure_size(pb), _SKATE_MIN_FRACTION * max(dx, dy))
         self.trail_span = min(options.trail, _TRAIL_CAP * self.video_seconds) * (m.t1 - m.t0) / self.video_seconds
@@ -329,6 +339,8 @@ class _Scene:
         self.toe.set_data([x + self.half * c], [y + self.half * s])
         self.mass.set_data([mx], [my])
         self.link.set_data([x, mx], [y, my])
+        if self.reach is not None:
+            self.reach.set_center((x, y))
         if self.trail_span > 0 and time > m.t0:
             ts = np.linspace(max(m.t0, time - self.trail_span), time, _TRAIL_SAMPLES)
             _, _, _, tx, ty = m.pose(ts)

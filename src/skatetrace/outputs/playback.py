@@ -54,7 +54,8 @@ class Playback:
         Where the skater is at rest: the start of every section and the end of the last.
     rest_times : ndarray, shape (r,)
     summary : dict
-        Figure name, trace status and message, duration, and the verification checks
+        Figure name, trace status and message, duration, the planner's ``reach`` (None without
+        one), and the verification checks
         (``report.json``'s status, message, deviation, tolerance, cusp speed) if present, and
         ``feasibility`` and ``verdict`` (the second verdict: could a skater do it) where the report has them.
     """
@@ -153,6 +154,8 @@ def load_playback(source: str | Path) -> Playback:
         "figure": result["figure"].name, "success": result["success"], "status": result["status"],
         "message": result["message"], "duration": float(t[-1] - t[0]), "sections": len(result["sections"]),
         "params": p, "unit": result.get("unit", "model"),
+        # the planner's reach (None for the launch-glide-stop manoeuvres): the viewer draws it
+        "reach": (result.get("options") or {}).get("reach"),
     }
     report_path = folder / "report.json"
     if report_path.is_file():

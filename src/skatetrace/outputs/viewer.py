@@ -253,6 +253,14 @@ def _feasibility_rows(feas: Any) -> list[dict[str, Any]]:
         rows.append({"name": f"feasible: {title}", "value": _number(c.get("value"), ".3g") + unit,
                      "limit": f"{sign} {_number(c.get('limit'), '.3g')}{unit}{where}",
                      "passed": None if c.get("passed") is None else bool(c["passed"]), "kind": "feasibility"})
+    info = feas.get("info") if isinstance(feas.get("info"), dict) else {}
+    force, impulse = info.get("force_unit", ""), info.get("impulse_unit", "")
+    for key, name, unit in (("peak_force_on_mass", "peak force on the mass", force),
+                            ("max_cusp_mass_speed", "mass speed at a cusp (relative to the stopped blade)", ""),
+                            ("max_cusp_impulse", "impulse on the mass at a cusp", impulse)):
+        if key in info:  # measured, without a limit: reported beside the checks
+            rows.append({"name": name, "value": _number(info[key], ".3g") + (f" {unit}" if unit else ""),
+                         "limit": "reported", "passed": None, "kind": "feasibility"})
     rows.append({"name": "humanly feasible", "value": str(feas.get("status", "–")),
                  "limit": str((feas.get("limits") or {}).get("assumptions", "")),
                  "passed": None if feas.get("feasible") is None else bool(feas["feasible"]), "kind": "feasibility"})
@@ -273,7 +281,8 @@ def _summary_rows(playback: Playback, units: dict[str, str]) -> list[tuple[str, 
         ("duration", f"{_number(s.get('duration', playback.duration), '.4f')}{tu}"),
         ("parameters", params),
         ("units", units["label"]),
-    ]
+    ] + ([("reach", f"{_number(s['reach'])}{' ' + units['length'] if units.get('length') else ''} (the planner's; "
+                    "circle around the blade)")] if isinstance(s.get("reach"), (int, float)) else [])
 
 
 def _tables_html(playback: Playback, units: dict[str, str]) -> tuple[str, str]:

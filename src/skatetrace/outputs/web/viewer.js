@@ -226,6 +226,9 @@
     el("line", { "class": "blade", x1: r2(-blade / 2), y1: 0, x2: r2(blade / 2), y2: 0 }, skate);
     el("path", { "class": "toe", d: "M" + r2(blade / 2 + 9) + " 0L" + r2(blade / 2 - 1) + " -5.5L" + r2(blade / 2 - 1) + " 5.5Z" }, skate);
     el("circle", { "class": "contact", cx: 0, cy: 0, r: 3.2 }, skate);
+    // the planner's reach: the mass stays inside this circle around the contact point
+    var REACH = D.summary && typeof D.summary.reach === "number" ? D.summary.reach : null;
+    if (REACH !== null) el("circle", { id: "reach", "class": "reach", cx: 0, cy: 0, r: r2(REACH * SCALE) }, skate);
     mass = el("circle", { id: "mass", r: 7 }, stage);
 
     // clock
