@@ -442,3 +442,28 @@ def test_trace_reach_too_small_is_answered_as_data(tmp_path, capsys):
     assert not result["success"] and (out / "report.json").exists()
     sec = result["sections"][0]
     assert sec["status"] == "INFEASIBLE" and 0.02 < sec["metrics"]["smallest_feasible_reach"] <= 0.1
+
+
+def test_tradeoff_sweeps_the_reach_and_marks_what_fails(tmp_path, capsys):
+    out = tmp_path / "t"
+    assert main(["tradeoff", str(_arc_file(tmp_path)), "--reaches", "1.5,0.02,1", "--out", str(out)]) == 0
+    data = json.loads((out / "tradeoff.json").read_text())
+    assert data["schema"] == "skatetrace.tradeoff/1" and (out / "tradeoff.png").stat().st_size > 0
+    reach = [p["reach"] for p in data["points"]]
+    assert reach == [0.02, 1.0, 1.5]                       # swept in increasing order
+    ok = [p["success"] for p in data["points"]]
+    assert ok == [False, True, True] and data["smallest_reach"] == 1.0
+    for p in data["points"][1:]:
+        assert p["distance"] <= p["reach"]
+    # a larger reach costs no more force; today's manoeuvres put the mass further out than any
+    assert data["points"][2]["peak_force"] <= data["points"][1]["peak_force"]
+    assert data["reference"]["reach"] is None and data["reference"]["distance"] > 1.5
+    printed = capsys.readouterr().out
+    assert "smallest reach planned and verified: 1 model units" in printed and "FAILED" in printed
+
+
+@pytest.mark.parametrize("args, why", [(["--reaches", "0.5m"], "physical length"), (["--reaches", "0,1"], "positive"),
+                                       (["--objective", "time"], "max_accel"), (["--max-accel", "-2"], "max-accel")])
+def test_tradeoff_refuses_what_cannot_be_swept(tmp_path, capsys, args, why):
+    assert main(["tradeoff", str(_arc_file(tmp_path)), *args, "--out", str(tmp_path / "t")]) == 2
+    assert why in capsys.readouterr().err

@@ -36,7 +36,8 @@ from .tracing.sections import FigureTrace, TraceOptions, trace_figure
 from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
 
-__all__ = ["REST_POLICIES", "VerifiedTrace", "add_rests", "middle_join", "trace_and_verify"]
+__all__ = ["REST_POLICIES", "ReachPoint", "ReachSweep", "VerifiedTrace", "add_rests", "middle_join", "sweep_reach",
+           "trace_and_verify"]
 
 REST_POLICIES = ("auto", "never", "joins")
 
@@ -201,3 +202,111 @@ def _finish(result: VerifiedTrace, limits: HumanLimits | None) -> VerifiedTrace:
         limits = HumanLimits.for_model(params=trace.params)
     feasibility = assess_feasibility(trace, result.schedule, result.states, limits)
     return replace(result, trace=trace, feasibility=feasibility)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReachPoint:
+    """One reach of a sweep (:func:`sweep_reach`): what planning within it gave, measured on the exported rows.
+
+    ``reach`` is None for the launch-glide-stop manoeuvres (the reference). ``success`` is the
+    first verdict (traced and verified), ``feasible`` the second; ``distance`` is the mass's
+    largest distance from the blade, ``peak_force`` the largest force on it, ``effort`` the
+    integral of the squared force, ``duration`` the figure's, ``cusp_impulse`` and
+    ``cusp_mass_speed`` the largest impulse on the mass at a cusp and its speed relative to the
+    stopped blade there; NaN where nothing was traced.
+    """
+
+    reach: float | None
+    success: bool
+    feasible: bool
+    message: str
+    distance: float
+    peak_force: float
+    effort: float
+    duration: float
+    cusp_impulse: float
+    cusp_mass_speed: float
+    seconds: float
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ReachSweep:
+    """The trade-off of a figure: effort, force and duration against the reach (:func:`sweep_reach`)."""
+
+    figure: str
+    objective: str
+    points: tuple[ReachPoint, ...]
+    reference: ReachPoint
+
+    @property
+    def success(self) -> bool:
+        """True when at least one reach was planned, traced exactly and verified."""
+        return any(p.success for p in self.points)
+
+    @property
+    def smallest_reach(self) -> float | None:
+        """The smallest reach swept that was planned and verified (None if none was)."""
+        ok = [p.reach for p in self.points if p.success]
+        return min(ok) if ok else None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The sweep as plain data (schema ``skatetrace.tradeoff/1``)."""
+        from dataclasses import asdict
+
+        return {"schema": "skatetrace.tradeoff/1", "figure": self.figure, "objective": self.objective,
+                "smallest_reach": self.smallest_reach, "reference": asdict(self.reference),
+                "points": [asdict(p) for p in self.points]}
+
+
+def sweep_reach(figure: Figure, reaches: Iterable[float], params: SleighParams | None = None,
+                options: TraceOptions = TraceOptions(), *, rel_tol: float = 1e-6, limits: HumanLimits | None = None,
+                progress=None) -> ReachSweep:
+    """Plan ``figure`` within each of ``reaches`` and measure what each costs, beside today's manoeuvres.
+
+    Parameters
+    ----------
+    reaches : iterable of float
+        Reaches to plan within (the figure's units), each positive; swept in increasing order.
+    options : TraceOptions
+        Everything else (speed, objective, bounds); its ``reach`` is replaced by each of ``reaches``.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each reach (the reference counts as one).
+
+    Returns
+    -------
+    ReachSweep
+        Never raises for a reach that cannot be planned: its point says so (``success`` False).
+    """
+    values = sorted(float(r) for r in reaches)
+    if not values or not all(np.isfinite(r) and r > 0 for r in values):
+        raise ValueError(f"reaches must be positive finite lengths, at least one; got {values!r}")
+    import time
+
+    def point(reach: float | None) -> ReachPoint:
+        t0 = time.perf_counter()
+        done = trace_and_verify(figure, params, replace(options, reach=reach), rests="never" if reach else "auto",
+                                rel_tol=rel_tol, limits=limits)
+        info = done.feasibility.info if done.feasibility is not None else {}
+        checks = {c.name: c.value for c in done.feasibility.checks} if done.feasibility is not None else {}
+        traced = done.schedule.t.size > 0
+        nan = float("nan")
+        return ReachPoint(
+            reach=reach, success=done.success, feasible=bool(done.feasibility and done.feasibility.feasible),
+            message=done.message, distance=float(checks.get("reach", nan)) if traced else nan,
+            peak_force=float(info.get("peak_force_on_mass", nan)) if traced else nan,
+            effort=float(info.get("effort", nan)) if traced else nan,
+            duration=float(done.schedule.t[-1] - done.schedule.t[0]) if traced else nan,
+            cusp_impulse=float(info.get("max_cusp_impulse", nan)) if traced else nan,
+            cusp_mass_speed=float(info.get("max_cusp_mass_speed", nan)) if traced else nan,
+            seconds=time.perf_counter() - t0)
+
+    total = len(values) + 1
+    reference = point(None)
+    if progress is not None:
+        progress(1, total)
+    points = []
+    for k, reach in enumerate(values):
+        points.append(point(reach))
+        if progress is not None:
+            progress(k + 2, total)
+    return ReachSweep(figure=figure.name, objective=options.objective, points=tuple(points), reference=reference)

@@ -1,4 +1,4 @@
-"""Command-line interface: ``skatetrace trace``, ``fit``, ``animate``, ``view``, ``figures`` and ``reproduce``.
+"""Command-line interface: ``skatetrace trace``, ``tradeoff``, ``fit``, ``animate``, ``view``, ``figures``, ``reproduce``.
 
 The only module that prints or exits. Exit codes: 0 success, 1 a solve or verification that
 failed, 2 a usage error (bad arguments, unreadable or malformed figure file).
@@ -137,6 +137,21 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--no-viewer", action="store_true", help="skip viewer.html (the self-contained HTML viewer)")
     _add_planner_args(t)
     _add_source_args(t)
+    d = sub.add_parser("tradeoff", help="plan a figure within a range of reaches: peak force, effort and duration "
+                                        "against the reach, beside the launch-glide-stop manoeuvres")
+    d.add_argument("figure", help="as for 'trace'")
+    d.add_argument("--out", default="tradeoff", help="output folder for tradeoff.json and tradeoff.png "
+                                                     "(default: tradeoff)")
+    d.add_argument("--reaches", help="comma-separated reaches, e.g. 0.3m,0.4m,0.5m (or plain numbers in the "
+                                     "figure's units); default 0.6, 0.8, 1, 1.25 and 1.5 times --reach auto for "
+                                     "figures in metres, times 1 in model units")
+    d.add_argument("--speed", type=float, help="glide speed (default: 1 model unit, 2 m/s for figures in metres)")
+    d.add_argument("--objective", choices=("effort", "time"), default="effort", help="as for 'trace'")
+    d.add_argument("--max-accel", type=float, help="as for 'trace'")
+    d.add_argument("--verify-tol", type=float, default=1e-6, help="as for 'trace'")
+    d.add_argument("--no-plots", action="store_true", help="skip tradeoff.png")
+    d.set_defaults(M=None, m=None, I=None)
+    _add_source_args(d)
     f = sub.add_parser("fit", help="fit a drawing by arcs and lines (and, with --exact, curvature splines) "
                                    "without tracing: pieces, certified tolerance, plot")
     f.add_argument("drawing", help="an SVG file or a point list (.csv, .txt, .dat)")
@@ -526,7 +541,7 @@ def _check_values(args) -> None:
             bound = "" if upper == math.inf else f" at most {upper:g}"
             raise SkatetraceError(f"{name} must be a positive finite number{bound}, got {value!r}")
 
-    if args.command not in ("trace", "fit"):
+    if args.command not in ("trace", "fit", "tradeoff"):
         return
     for name, upper in (("height", 1e3), ("body_mass", 1e6), ("blade", 1e3)):
         positive("--" + name.replace("_", "-"), getattr(args, name), upper)
@@ -539,21 +554,83 @@ def _check_values(args) -> None:
                 value is None or parse_length(value)
             except SkatetraceError as exc:
                 raise SkatetraceError(f"{name}: {exc}") from None
+    if args.command in ("trace", "tradeoff"):
+        positive("--max-accel", args.max_accel)
     if args.command == "trace":
         for name in ("M", "m", "I"):
             value = getattr(args, name)
             if value is not None and not PARAM_RANGE[0] <= value <= PARAM_RANGE[1]:
                 raise SkatetraceError(f"--{name} must be a positive number between {PARAM_RANGE[0]:g} and "
                                       f"{PARAM_RANGE[1]:g}, got {value!r}")
+    if args.command in ("trace", "tradeoff"):
         positive("--verify-tol", args.verify_tol, 1.0)
         if args.speed is not None and not SPEED_RANGE[0] <= args.speed <= SPEED_RANGE[1]:
             raise SkatetraceError(f"--speed must be a positive number between {SPEED_RANGE[0]:g} and "
                                   f"{SPEED_RANGE[1]:g}, got {args.speed!r}")
 
 
+def _reaches(args, unit: str) -> list[float]:
+    """``--reaches`` in the figure's units, or the default sweep around the reach for the figure's units."""
+    from ..drawings.lengths import parse_length
+    from ..dynamics.presets import skater_reach
+
+    if args.reaches is None:
+        base = skater_reach(args.height) if unit == "m" else 1.0
+        return [f * base for f in (0.6, 0.8, 1.0, 1.25, 1.5)]
+    out = []
+    for word in args.reaches.split(","):
+        value, given = parse_length(word)
+        if given == "m" and unit != "m":
+            raise SkatetraceError(f"--reaches {word!r} is a physical length but the figure is in model units: give "
+                                  "plain numbers")
+        out.append(value)
+    return out
+
+
+def _tradeoff(args) -> int:
+    from ..outputs.files import atomic_write, dumps_json, write_atomically
+    from ..pipeline import sweep_reach
+
+    t0 = time.perf_counter()
+    res = _resolve(args, args.figure)
+    params = res.figure.params or SleighParams()
+    speed = args.speed if args.speed is not None else (2.0 if res.unit == "m" else 1.0)
+    reaches = _reaches(args, res.unit)
+    options = TraceOptions(speed=speed, objective=args.objective, max_accel=args.max_accel,
+                           reach=min(reaches))  # checks the objective's needs before any work
+    _compile_once()
+    unit = "m" if res.unit == "m" else "model units"
+    print(f"planning {res.figure.name} within {len(reaches)} reaches ({', '.join(f'{r:.3g}' for r in sorted(reaches))} "
+          f"{unit}) and with the launch-glide-stop manoeuvres, least {args.objective}")
+    sweep = sweep_reach(res.figure, reaches, params, options, rel_tol=args.verify_tol,
+                        limits=_human_limits(args, res, params), progress=_progress_bar("reaches"))
+    out = Path(args.out)
+    atomic_write(out / "tradeoff.json", dumps_json({**sweep.to_dict(), "unit": res.unit}))
+    written = ["tradeoff.json"]
+    if not args.no_plots:
+        from ..outputs.plotting import tradeoff_figure
+
+        fig = tradeoff_figure(sweep, unit=res.unit)
+        write_atomically(out / "tradeoff.png", lambda tmp: fig.savefig(tmp, format="png", dpi=110))
+        written.append("tradeoff.png")
+    print(f"{'reach':>9} {'distance':>9} {'peak force':>11} {'effort':>10} {'duration':>9} {'cusp impulse':>12} "
+          f"{'time':>6}  verdict")
+    for p in (sweep.reference, *sweep.points):
+        name = "none" if p.reach is None else f"{p.reach:.4g}"
+        verdict = "verified" if p.success else "FAILED: " + p.message
+        if p.success:
+            verdict += ", humanly feasible" if p.feasible else ", not humanly feasible"
+        print(f"{name:>9} {p.distance:>9.3g} {p.peak_force:>11.3g} {p.effort:>10.3g} {p.duration:>9.4g} "
+              f"{p.cusp_impulse:>12.3g} {p.seconds:>5.0f}s  {verdict}")
+    smallest = sweep.smallest_reach
+    print(f"smallest reach planned and verified: {'none' if smallest is None else f'{smallest:.4g} {unit}'}; wrote "
+          f"{', '.join(written)} to {out}/ in {time.perf_counter() - t0:.1f} s")
+    return 0 if sweep.success else 1
+
+
 def _run(args) -> int:
     commands = {"figures": _figures, "fit": _fit, "reproduce": _reproduce, "animate": _animate, "view": _view,
-                "trace": _trace}
+                "trace": _trace, "tradeoff": _tradeoff}
     return commands[args.command](args)
 
 
@@ -561,7 +638,7 @@ def _output_folder(args):
     """The ``--out`` folder of ``trace``, ``fit`` and ``reproduce``, checked (and created) before any work."""
     from ..outputs.folder import OutputFolder
 
-    if args.command in ("trace", "fit"):
+    if args.command in ("trace", "fit", "tradeoff"):
         return OutputFolder(args.out, args.command)
     if args.command == "reproduce":
         return OutputFolder(args.out, args.command, subfolders=() if args.no_figures else ("figures",))

@@ -25,7 +25,7 @@ if TYPE_CHECKING:  # annotations only: importing plotting does not load the trac
     from ..verification.verify import VerificationReport
 
 __all__ = ["axis_units", "plot_figure", "plot_controls", "plot_speed", "plot_mass_path", "plot_energies",
-           "plot_fit", "plot_fit_curvature", "fit_figure", "save_all"]
+           "plot_fit", "plot_fit_curvature", "fit_figure", "save_all", "tradeoff_figure"]
 
 _UNITS = {
     "m": {"length": "m", "time": "s", "speed": "m/s", "acceleration": "m/s²", "energy": "J", "curvature": "1/m"},
@@ -434,4 +434,46 @@ def fit_figure(drawing, fit, *, exact=None, unit: str = "model"):
     ax_xy, ax_k = fig.subplots(2, 1, height_ratios=(3, 1.2))
     plot_fit(drawing, fit, ax_xy, exact=exact, unit=unit)
     plot_fit_curvature(fit, ax_k, exact=exact, unit=unit)
+    return fig
+
+
+def tradeoff_figure(sweep, *, unit: str = "model"):
+    """tradeoff.png's figure: peak force, effort and duration against the reach, today's manoeuvres as reference lines.
+
+    ``sweep`` is a :class:`~skatetrace.pipeline.ReachSweep`. Reaches that were not planned and
+    verified are marked with crosses on the axis; the reference (the launch-glide-stop
+    manoeuvres, whose mass goes ``sweep.reference.distance`` from the blade) is a dashed line.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Not registered with pyplot; three axes sharing the reach.
+    """
+    from matplotlib.figure import Figure
+
+    u = axis_units(unit)
+    force = "N" if unit == "m" else "model force"
+    fig = Figure(figsize=(7.5, 9), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    reach = np.array([p.reach for p in sweep.points], dtype=float)
+    ok = np.array([p.success for p in sweep.points], dtype=bool)
+    rows = (("peak_force", f"peak force on the mass ({force})"),
+            ("effort", "effort: ∫ |force|² dt" + (" (N² s)" if unit == "m" else " (model units)")),
+            ("duration", f"duration ({u['time']})"))
+    for ax, (key, label) in zip(axes, rows):
+        _ax(ax)
+        y = np.array([getattr(p, key) for p in sweep.points], dtype=float)
+        ax.plot(reach[ok], y[ok], "o-", color="#ef7d18", label="planned within the reach")
+        if np.any(~ok):
+            ax.plot(reach[~ok], np.zeros(int(np.sum(~ok))), "x", color="#c0392b", ms=9, clip_on=False,
+                    label="not planned / not verified")
+        ref = getattr(sweep.reference, key)
+        if np.isfinite(ref):
+            ax.axhline(ref, ls="--", color="0.4", lw=1.0,
+                       label=f"launch-glide-stop (mass {sweep.reference.distance:.3g} {u['length']} out)")
+        ax.set_ylabel(label)
+        ax.set_ylim(bottom=0.0)
+    _legend(axes[0])
+    axes[-1].set_xlabel(f"reach: largest distance of the mass from the blade ({u['length']})")
+    axes[0].set_title(f"{sweep.figure}: the cost of a smaller reach (least {sweep.objective})")
     return fig
