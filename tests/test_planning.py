@@ -119,3 +119,14 @@ def test_the_default_reach_is_the_trunk_length():
     for bad in (0.0, -1.7, math.nan, "tall"):
         with pytest.raises(ValueError, match="height"):
             skater_reach(bad)
+
+
+def test_least_time_under_an_acceleration_bound_is_faster_and_keeps_the_bound():
+    fig = figure_from_dict({"schema": "skatetrace.figure/1",
+                            "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 198}]}]})
+    effort = st.trace_and_verify(fig, st.PAPER_PARAMS, st.TraceOptions(reach=1.0))
+    fast = st.trace_and_verify(fig, st.PAPER_PARAMS, st.TraceOptions(reach=1.0, objective="time", max_accel=20.0))
+    assert effort.success and fast.success, fast.message
+    assert fast.trace.sections[0].duration < effort.trace.sections[0].duration
+    measured = {c.name: c.value for c in fast.feasibility.checks}
+    assert measured["mass_acceleration"] <= 20.0 and measured["reach"] <= 1.0  # on the exported rows
