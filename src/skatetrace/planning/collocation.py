@@ -81,7 +81,15 @@ class SectionSpec:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ProgramOptions:
-    """What the program asks for, in normalised units (masses with ``M + m = 1``, top speed 1)."""
+    """What the program asks for, in normalised units (masses with ``M + m = 1``, top speed 1).
+
+    Besides the constraints of the module docstring: ``start_position`` and ``start_rates`` pin
+    the first section's start (the mass's ``(a, b)`` and its rates); ``closing_turn`` links the
+    last section back to the first; the mesh has at least ``intervals`` per section and one per
+    ``interval_duration`` of it; ``min_speed`` is the floor of the blade's speed away from the
+    rests; ``tol``, ``max_iter``, ``print_level``, ``barrier`` (IPOPT's ``mu_strategy``) and
+    ``mu_init`` go to IPOPT.
+    """
 
     M: float
     m: float
@@ -96,8 +104,6 @@ class ProgramOptions:
     closing_turn: float | None = None
     start_position: tuple[float, float] | None = None
     start_rates: tuple[float, float] | None = None
-    end_position: tuple[float, float] | None = None
-    end_rates: tuple[float, float] | None = None
     intervals: int = 36
     interval_duration: float = 0.3
     top_speed: float = 1.0
@@ -280,10 +286,6 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
         x_end = sec_X[-1][:, -1]
         s_last = s_start - spec.pieces[-1].length
         opti.subject_to(xi2f(x_end, 0.0, last_cf, s_last) == 0.0)
-        if k == len(sections) - 1 and o.end_position is not None:
-            opti.subject_to(x_end[2:4] == ca.DM(list(o.end_position)))
-        if k == len(sections) - 1 and o.end_rates is not None:
-            opti.subject_to(ratesf(x_end, 0.0, last_cf, s_last) == ca.DM(list(o.end_rates)))
         if o.objective == "effort":
             opti.subject_to(sum(sec_T) == duration)
         end = (x_end, last_cf, s_last)

@@ -5,17 +5,20 @@ For each curve, in skating order:
 1. every section is posed in its travel frame (:class:`~skatetrace.planning.collocation.SectionSpec`),
    with the turn that carries the mass's position from the end of one section into the next
    (pivots and reversals);
-2. a warm start: the sections solved one after another by IPOPT from launch-glide-stop guesses,
-   each starting where the previous one left the mass (if one cannot, it starts free);
+2. a warm start: every distinct section planned on its own by IPOPT from a launch-glide-stop guess;
 3. the whole curve as one multi-phase program from that start: the position of the mass on the
    ice continuous through every cusp (a hard constraint), the jump of its velocity (an impulse)
-   penalised as the effort of delivering it over ``impulse_time``;
+   penalised as the effort of delivering it over ``impulse_time``; its mesh then refined twice
+   against the compiled integrator (:mod:`skatetrace.planning.mesh`);
 4. the exact finish of every section (:func:`~skatetrace.planning.finish.finish_section`), each
-   starting exactly where the previous one ended, and the reach checked between samples.
+   starting exactly where the previous one ended, and the reach checked between samples; where
+   the exact motion leaves the reach, the curve is planned again inside a smaller one.
 
 Sections come back as :class:`~skatetrace.tracing.sections.SectionTrace` objects (one phase per affine
 piece of the control), so everything downstream (replay, outputs) treats them like any other.
-A section that cannot be planned within the reach is returned as data (``TraceStatus.INFEASIBLE``).
+A section that cannot be planned within the reach is returned as data (``TraceStatus.INFEASIBLE``,
+with the smallest of a few larger reaches within which it plans on its own), a curve whose linked
+program IPOPT cannot solve as ``TraceStatus.NOT_PLANNED``.
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ _ACCEL_MARGIN = 0.9
 _REACH_MARGIN = 0.98
 
 
-def curve_specs(curve, speed_scale: float = 1.0) -> tuple[list[SectionSpec], list]:
+def curve_specs(curve) -> tuple[list[SectionSpec], list]:
     """The sections of ``curve`` in their travel frames, and the sections themselves."""
     sections = curve.sections()
     specs = []
