@@ -193,11 +193,16 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
             curve_traces = _finish_curve(plan, link, specs, sections, ci, params, options, fn)
         for _ in range(_MARGIN_ROUNDS):
             # The exact motion strays from the plan by the collocation's error: where it leaves the
-            # reach, plan again inside a reach shrunk by the excess (the plan as the guess).
+            # reach, plan again inside a reach shrunk by the excess (the plan as the guess). Where an
+            # exact finish stalls (multiple shooting stuck near 1e-9 on a nearly singular Jacobian:
+            # circle eight at 0.5 m, condition 2e10), the same with the reach 1 % smaller: a nearby
+            # plan, whose finish converges.
             worst = max((tr.metrics.get("reach", 0.0) for tr in curve_traces if tr.metrics), default=0.0)
-            if plan is None or not plan.success or not worst > options.reach:
+            stalled = any(tr.status is TraceStatus.RESIDUAL for tr in curve_traces)
+            if plan is None or not plan.success or not (worst > options.reach or stalled):
                 break
-            shrunk = dataclasses.replace(curve_opts, reach=curve_opts.reach * options.reach / worst * 0.99)
+            factor = options.reach / worst if worst > options.reach else 1.0
+            shrunk = dataclasses.replace(curve_opts, reach=curve_opts.reach * factor * 0.99)
             again = solve_program(specs, dataclasses.replace(shrunk, barrier="monotone", mu_init=1e-4), guess=plan,
                                   meshes=plan.meshes)
             if not again.success:
@@ -213,7 +218,7 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))
 
 
-#: Rounds of planning again inside a smaller reach when the exact motion leaves it.
+#: Rounds of planning again inside a smaller reach when the exact motion leaves it or a finish stalls.
 _MARGIN_ROUNDS = 2
 #: Collocation intervals per shooting segment of the exact finish, longest first: over long
 #: segments the integration's round-off, grown by the sleigh's instability, holds the continuity
