@@ -130,3 +130,19 @@ def test_least_time_under_an_acceleration_bound_is_faster_and_keeps_the_bound():
     assert fast.trace.sections[0].duration < effort.trace.sections[0].duration
     measured = {c.name: c.value for c in fast.feasibility.checks}
     assert measured["mass_acceleration"] <= 20.0 and measured["reach"] <= 1.0  # on the exported rows
+
+
+def test_sections_one_after_another_start_where_the_mass_was_left():
+    # the fallback where IPOPT cannot solve a curve's linked program
+    from skatetrace.planning.planner import _one_after_another, _program_options, _warm_start, curve_specs
+
+    fig = figure_from_dict(CUSPS["pivot"])
+    popts = _program_options(fig.params, st.TraceOptions(reach=1.0))
+    specs, _sections = curve_specs(fig.curves[0])
+    guess, bad = _warm_start(specs, popts)
+    assert bad is None
+    plan, links = _one_after_another(specs, popts, guess)
+    assert links == ("start", "impulse")
+    end = plan.states[0][2:4, -1]
+    c, s = math.cos(specs[1].turn), math.sin(specs[1].turn)
+    np.testing.assert_allclose(plan.states[1][2:4, 0], [c * end[0] - s * end[1], s * end[0] + c * end[1]], atol=1e-9)

@@ -149,17 +149,58 @@ def _refine(plan: ProgramSolution, specs, popts: ProgramOptions) -> ProgramSolut
     return plan
 
 
-def _plan_curve(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None]:
+def _plan_curve(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None, tuple[str, ...]]:
     """The curve as one program from the sections planned on their own, its mesh then refined.
 
-    Returns the plan, or None and the index of a section that has no plan on its own.
+    Where IPOPT cannot solve the linked program (the serpentine at 0.5 m: 1000 iterations), the
+    sections are planned one after another instead, each from where the previous one left the
+    mass (:func:`_one_after_another`). Returns the plan, the index of a section that has no plan
+    on its own (else None) and how each section meets the one before (:func:`_finish_curve`).
     """
     guess, bad = _warm_start(specs, popts)
-    if guess is None or len(specs) == 1:
-        return (None, bad) if guess is None else (_refine(guess, specs, popts), None)
+    if guess is None:
+        return None, bad, ()
+    links = ("start",) + ("impulse",) * (len(specs) - 1)
+    if len(specs) == 1:
+        return _refine(guess, specs, popts), None, links
     linked = dataclasses.replace(popts, barrier="monotone")
     plan = solve_program(specs, linked, guess=guess)
-    return (_refine(plan, specs, linked) if plan.success else plan), None
+    if plan.success:
+        return _refine(plan, specs, linked), None, links
+    plan, links = _one_after_another(specs, popts, guess)
+    return plan, None, links
+
+
+def _one_after_another(specs, popts: ProgramOptions, guess: ProgramSolution):
+    """Each section from where the previous one's plan left the mass (position on the ice), else from its own start.
+
+    Returns the plan and the links: ``"impulse"`` where a section starts where the previous one
+    ended (its velocity may jump), ``"jump"`` where it could not and starts from its own plan
+    (the mass's position jumps: reported, never hidden).
+    """
+    sols, links = [], []
+    for k, spec in enumerate(specs):
+        alone = [dataclasses.replace(spec, turn=0.0)]
+        own = ProgramSolution(success=True, status="own start", message="own start", times=(guess.times[k],),
+                              states=(guess.states[k],), controls=(guess.controls[k],), meshes=(guess.meshes[k],))
+        sol, opts = None, popts
+        if sols:
+            end = RestState(float(sols[-1].states[0][2, -1]), float(sols[-1].states[0][3, -1]), 0.0, 0.0)
+            moved = end.turned(spec.turn)
+            # the previous plan may end on the reach's boundary, a few 1e-9 outside in round-off
+            inside = min(1.0, popts.reach / max(math.hypot(moved.a, moved.b), 1e-300))
+            opts = dataclasses.replace(popts, start_position=(moved.a * inside, moved.b * inside))
+            sol = solve_program(alone, opts, guess=own, meshes=own.meshes)
+        if sol is not None and sol.success:
+            links.append("impulse")
+        else:
+            sol, opts = own, popts
+            links.append("start" if k == 0 else "jump")
+        sols.append(_refine(sol, alone, opts))
+    plan = ProgramSolution(success=True, status="one after another", message="sections planned one after another",
+                           times=tuple(x.times[0] for x in sols), states=tuple(x.states[0] for x in sols),
+                           controls=tuple(x.controls[0] for x in sols), meshes=tuple(x.meshes[0] for x in sols))
+    return plan, tuple(links)
 
 
 def plan_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
@@ -185,12 +226,11 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     for ci, curve in enumerate(figure.curves):
         specs, sections = curve_specs(curve)
         curve_opts = popts
-        plan, bad = _plan_curve(specs, curve_opts)
-        link = "continuous" if popts.continuous_velocity else "impulse"
+        plan, bad, links = _plan_curve(specs, curve_opts)
         if plan is None:
             curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, popts)
         else:
-            curve_traces = _finish_curve(plan, link, specs, sections, ci, params, options, fn)
+            curve_traces = _finish_curve(plan, links, specs, sections, ci, params, options, fn)
         for _ in range(_MARGIN_ROUNDS):
             # The exact motion strays from the plan by the collocation's error: where it leaves the
             # reach, plan again inside a reach shrunk by the excess (the plan as the guess). Where an
@@ -203,12 +243,16 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
                 break
             factor = options.reach / worst if worst > options.reach else 1.0
             shrunk = dataclasses.replace(curve_opts, reach=curve_opts.reach * factor * 0.99)
-            again = solve_program(specs, dataclasses.replace(shrunk, barrier="monotone", mu_init=1e-4), guess=plan,
-                                  meshes=plan.meshes)
+            if "jump" in links or plan.status == "one after another":
+                again, again_links = _one_after_another(specs, shrunk, plan)
+            else:
+                again = solve_program(specs, dataclasses.replace(shrunk, barrier="monotone", mu_init=1e-4), guess=plan,
+                                      meshes=plan.meshes)
+                again_links = links
             if not again.success:
                 break
-            plan, curve_opts = again, shrunk
-            curve_traces = _finish_curve(plan, link, specs, sections, ci, params, options, fn)
+            plan, curve_opts, links = again, shrunk, again_links
+            curve_traces = _finish_curve(plan, links, specs, sections, ci, params, options, fn)
         for tr in curve_traces:
             traces.append(tr)
             starts.append(t)
@@ -226,8 +270,13 @@ _MARGIN_ROUNDS = 2
 _STRIDES = (2, 1)
 
 
-def _finish_curve(plan, link, specs, sections, ci, params, options, fn) -> list[SectionTrace]:
-    """Each section of a planned curve finished exactly from the exact end of the one before."""
+def _finish_curve(plan, links, specs, sections, ci, params, options, fn) -> list[SectionTrace]:
+    """Each section of a planned curve finished exactly from the exact end of the one before.
+
+    ``links[k]`` says how section ``k`` meets the one before: ``"start"`` (a curve's first
+    section), ``"continuous"`` (the mass's position and velocity carried on), ``"impulse"`` (its
+    position carried on, its velocity as planned) or ``"jump"`` (both as planned).
+    """
     out = []
     arrived = None  # the exact end of the previous section, in this section's frame
     for k, (spec, sec) in enumerate(zip(specs, sections)):
@@ -241,8 +290,10 @@ def _finish_curve(plan, link, specs, sections, ci, params, options, fn) -> list[
         X, times = plan.states[k], plan.times[k]
         r0, r1 = _rates(fn, X, spec, False), _rates(fn, X, spec, True)
         planned = RestState(float(X[2, 0]), float(X[3, 0]), float(r0[0]), float(r0[1]))
-        kind = "start" if arrived is None else link
-        start = {"start": planned, "continuous": arrived,
+        kind = "start" if arrived is None and k == 0 else links[k]
+        if arrived is None and kind in ("continuous", "impulse"):
+            kind = "jump"  # the section before could not be finished: this one starts as planned
+        start = {"start": planned, "jump": planned, "continuous": arrived,
                  "impulse": dataclasses.replace(planned, a=arrived.a, b=arrived.b) if arrived else None}[kind]
         target = RestState(float(X[2, -1]), float(X[3, -1]), float(r1[0]), float(r1[1]))
         for stride in _STRIDES:
@@ -277,8 +328,9 @@ def _infeasible_curve(specs, sections, bad: int, ci, params, options, popts) -> 
 def _link_metrics(link: str, arrived: RestState | None, start: RestState, params: SleighParams,
                   options: TraceOptions) -> dict:
     """How the section meets the previous one: the kind, the impulse on the mass (N s) and the jump of its position."""
-    if arrived is None:
-        return {"link": link, "link_impulse": 0.0, "link_jump": 0.0}
+    if arrived is None:  # a curve's first section, or one after a section that could not be finished
+        unknown = 0.0 if link == "start" else math.nan
+        return {"link": link, "link_impulse": unknown, "link_jump": unknown}
     dv = math.hypot(start.adot - arrived.adot, start.bdot - arrived.bdot) * options.speed
     return {"link": link, "link_impulse": float(params.m * dv),
             "link_jump": float(math.hypot(start.a - arrived.a, start.b - arrived.b))}
