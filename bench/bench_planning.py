@@ -75,6 +75,10 @@ def markdown(rows: list[dict]) -> str:
             "| cusp impulse (N s) | duration (s) | residual | verified | plan time (× flower) |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for r in rows:
+        if not r["duration_after"] > 0:  # nothing planned: no motion to measure
+            lines.append(f"| {r['figure']} | {r['reach_before']:.3g} → – | {r['jump_before']:.3g} → – | – | – | – | – | – "
+                         f"| no: {r['message'][:60]} | {r['ratio']:.0f} |")
+            continue
         lines.append(
             f"| {r['figure']} | {r['reach_before']:.3g} → {r['reach_after']:.3g} | {r['jump_before']:.3g} → "
             f"{r['jump_after']:.1g} | {r['force_after']:.3g} | {r['cusp_mass_speed']:.3g} | {r['cusp_impulse']:.3g} | "

@@ -211,8 +211,10 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     the exact end of the one before, the mass's position on the ice carried through the cusp
     (turned by its pivot or reversal) and, where the program made it continuous, its velocity.
     Each section's ``metrics`` say how it meets the one before: ``link`` (``"start"`` for a
-    curve's first section, ``"continuous"`` or ``"impulse"``), the impulse on the mass in N s
-    (``link_impulse``) and the jump of its position (``link_jump``, zero up to round-off).
+    curve's first section, ``"impulse"`` where the mass's position is carried on and its velocity
+    may jump, ``"jump"`` where even its position could not be: see :func:`_plan_curve`), the
+    impulse on the mass in N s (``link_impulse``) and the jump of its position (``link_jump``,
+    zero up to round-off unless ``"jump"``).
     Never raises for a figure that cannot be planned: the sections that fail say why.
     """
     if options.reach is None:
@@ -243,7 +245,7 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
                 break
             factor = options.reach / worst if worst > options.reach else 1.0
             shrunk = dataclasses.replace(curve_opts, reach=curve_opts.reach * factor * 0.99)
-            if "jump" in links or plan.status == "one after another":
+            if plan.status == "one after another":
                 again, again_links = _one_after_another(specs, shrunk, plan)
             else:
                 again = solve_program(specs, dataclasses.replace(shrunk, barrier="monotone", mu_init=1e-4), guess=plan,
