@@ -31,6 +31,7 @@ import numpy as np
 from ..dynamics.model import SleighParams
 from ..figures.figure import Figure
 from ..figures.geometry import end_pose
+from ..tracing.maneuver import _singular_distances
 from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceStatus, _Phase, _with_metrics
 from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, solve_program
 from .finish import RestState, finish_section
@@ -105,10 +106,20 @@ def _warm_start(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, i
             if not sol.success:
                 return None, k
             solved[spec.pieces] = sol
-    sols = [solved[spec.pieces] for spec in specs]
-    return ProgramSolution(success=True, status="warm start", message="warm start",
-                           times=tuple(s.times[0] for s in sols), states=tuple(s.states[0] for s in sols),
-                           controls=tuple(s.controls[0] for s in sols), meshes=tuple(s.meshes[0] for s in sols)), None
+    return _chain([solved[spec.pieces] for spec in specs], "warm start"), None
+
+
+def _chain(sols: list[ProgramSolution], status: str) -> ProgramSolution:
+    """Single-section solutions as the plan of the chain of their sections (not linked to each other)."""
+    return ProgramSolution(success=True, status=status, message=status, times=tuple(s.times[0] for s in sols),
+                           states=tuple(s.states[0] for s in sols), controls=tuple(s.controls[0] for s in sols),
+                           meshes=tuple(s.meshes[0] for s in sols))
+
+
+def _section_of(plan: ProgramSolution, k: int) -> ProgramSolution:
+    """Section ``k`` of a chain's plan as a single-section solution (a guess for that section alone)."""
+    return ProgramSolution(success=True, status="own start", message="own start", times=plan.times[k:k + 1],
+                           states=plan.states[k:k + 1], controls=plan.controls[k:k + 1], meshes=plan.meshes[k:k + 1])
 
 
 #: Reaches tried, as multiples of the one asked for, to tell a user what would do instead.
@@ -181,8 +192,7 @@ def _one_after_another(specs, popts: ProgramOptions, guess: ProgramSolution):
     sols, links = [], []
     for k, spec in enumerate(specs):
         alone = [dataclasses.replace(spec, turn=0.0)]
-        own = ProgramSolution(success=True, status="own start", message="own start", times=(guess.times[k],),
-                              states=(guess.states[k],), controls=(guess.controls[k],), meshes=(guess.meshes[k],))
+        own = _section_of(guess, k)
         sol, opts = None, popts
         if sols:
             end = RestState(float(sols[-1].states[0][2, -1]), float(sols[-1].states[0][3, -1]), 0.0, 0.0)
@@ -197,10 +207,7 @@ def _one_after_another(specs, popts: ProgramOptions, guess: ProgramSolution):
             sol, opts = own, popts
             links.append("start" if k == 0 else "jump")
         sols.append(_refine(sol, alone, opts))
-    plan = ProgramSolution(success=True, status="one after another", message="sections planned one after another",
-                           times=tuple(x.times[0] for x in sols), states=tuple(x.states[0] for x in sols),
-                           controls=tuple(x.controls[0] for x in sols), meshes=tuple(x.meshes[0] for x in sols))
-    return plan, tuple(links)
+    return _chain(sols, "one after another"), tuple(links)
 
 
 def plan_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
@@ -364,21 +371,22 @@ def _section_trace(fin, sec, ci, params, options, spec, link: dict) -> SectionTr
 
 
 def _samples(trace: SectionTrace, n: int = 20001):
+    """``n`` times spread over the section, its breakpoints among them, and the motion there."""
     t = np.unique(np.concatenate([np.linspace(0.0, trace.duration, n), trace.breakpoints()]))
     return t, trace.evaluate(t, geometry=False)
 
 
 def _singular_distance(trace: SectionTrace) -> float:
-    _t, v = _samples(trace, 4001)
-    kap = np.array([trace.section.pieces[j].segment.curvature_at(0.0) for j in v["segment"]])
-    return float(np.min(np.hypot(v["a"], v["b"] + kap * trace.params.I / trace.params.M)))
+    """Closest approach of the mass to the singular point, leg by leg as the tracer measures it."""
+    return min(_singular_distances(trace.params, ph.maneuver.legs)[0] for ph in trace.phases)
 
 
 def _certified_reach(trace: SectionTrace) -> float:
     """Largest distance of the mass from the contact point, bounded between the samples.
 
     Between samples ``dt`` apart the distance changes at most at the mass's speed relative to the
-    blade, so it exceeds the larger sampled end by at most ``dt / 2`` times that speed's maximum.
+    blade, so it exceeds the larger sampled end by at most ``dt / 2`` times that speed's maximum
+    over the interval; the larger speed at the two ends stands for it with half as much again.
     """
     t, v = _samples(trace)
     r = np.hypot(v["a"], v["b"])
