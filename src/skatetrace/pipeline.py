@@ -286,19 +286,17 @@ def sweep_reach(figure: Figure, reaches: Iterable[float], params: SleighParams |
         t0 = time.perf_counter()
         done = trace_and_verify(figure, params, replace(options, reach=reach), rests="never" if reach else "auto",
                                 rel_tol=rel_tol, limits=limits)
-        info = done.feasibility.info if done.feasibility is not None else {}
-        checks = {c.name: c.value for c in done.feasibility.checks} if done.feasibility is not None else {}
-        traced = done.schedule.t.size > 0
+        traced = done.schedule.t.size > 0 and done.feasibility is not None
+        info = done.feasibility.info if traced else {}
+        checks = {c.name: c.value for c in done.feasibility.checks} if traced else {}
         nan = float("nan")
         return ReachPoint(
             reach=reach, success=done.success, feasible=bool(done.feasibility and done.feasibility.feasible),
-            message=done.message, distance=float(checks.get("reach", nan)) if traced else nan,
-            peak_force=float(info.get("peak_force_on_mass", nan)) if traced else nan,
-            effort=float(info.get("effort", nan)) if traced else nan,
+            message=done.message, distance=float(checks.get("reach", nan)),
+            peak_force=float(info.get("peak_force_on_mass", nan)), effort=float(info.get("effort", nan)),
             duration=float(done.schedule.t[-1] - done.schedule.t[0]) if traced else nan,
-            cusp_impulse=float(info.get("max_cusp_impulse", nan)) if traced else nan,
-            cusp_mass_speed=float(info.get("max_cusp_mass_speed", nan)) if traced else nan,
-            seconds=time.perf_counter() - t0)
+            cusp_impulse=float(info.get("max_cusp_impulse", nan)),
+            cusp_mass_speed=float(info.get("max_cusp_mass_speed", nan)), seconds=time.perf_counter() - t0)
 
     total = len(values) + 1
     reference = point(None)

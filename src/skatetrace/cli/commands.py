@@ -60,9 +60,19 @@ def _add_planner_args(t) -> None:
                    help="largest acceleration of the mass on the ice (figure units per s^2, e.g. m/s^2)")
 
 
+def _reach_length(text: str, unit: str, flag: str) -> float:
+    """One reach written by the user, in the figure's units: a physical length only for a figure in metres."""
+    from ..drawings.lengths import parse_length
+
+    value, given = parse_length(text)
+    if given == "m" and unit != "m":
+        raise SkatetraceError(f"{flag} {text!r} is a physical length but the figure is in model units: give "
+                              "a plain number (model units)")
+    return value
+
+
 def _reach(args, unit: str) -> float | None:
     """``--reach`` in the figure's units: a length, ``auto`` (from ``--height``) or ``none``."""
-    from ..drawings.lengths import parse_length
     from ..dynamics.presets import skater_reach
 
     word = args.reach.strip().lower()
@@ -73,11 +83,7 @@ def _reach(args, unit: str) -> float | None:
             raise SkatetraceError("--reach auto derives the reach from --height, for figures in metres; this figure "
                                   "is in model units: give a number (model units) or 'none'")
         return skater_reach(args.height)
-    value, given = parse_length(args.reach)
-    if given == "m" and unit != "m":
-        raise SkatetraceError(f"--reach {args.reach!r} is a physical length but the figure is in model units: give "
-                              "a plain number (model units), or 'none'")
-    return value
+    return _reach_length(args.reach, unit, "--reach")
 
 
 def _version() -> str:
@@ -571,20 +577,12 @@ def _check_values(args) -> None:
 
 def _reaches(args, unit: str) -> list[float]:
     """``--reaches`` in the figure's units, or the default sweep around the reach for the figure's units."""
-    from ..drawings.lengths import parse_length
     from ..dynamics.presets import skater_reach
 
     if args.reaches is None:
         base = skater_reach(args.height) if unit == "m" else 1.0
         return [f * base for f in (0.6, 0.8, 1.0, 1.25, 1.5)]
-    out = []
-    for word in args.reaches.split(","):
-        value, given = parse_length(word)
-        if given == "m" and unit != "m":
-            raise SkatetraceError(f"--reaches {word!r} is a physical length but the figure is in model units: give "
-                                  "plain numbers")
-        out.append(value)
-    return out
+    return [_reach_length(word, unit, "--reaches") for word in args.reaches.split(",")]
 
 
 def _tradeoff(args) -> int:
