@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from .nlp import SparseProgram
 from .symbolic import sleigh_functions
 
 __all__ = ["PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "solve_program"]
@@ -84,7 +85,8 @@ class ProgramOptions:
     """What the program asks for, in normalised units (masses with ``M + m = 1``, top speed 1).
 
     Besides the constraints of the module docstring: ``start_position`` and ``start_rates`` pin
-    the first section's start (the mass's ``(a, b)`` and its rates); ``closing_turn`` links the
+    the first section's start (the mass's ``(a, b)`` and its rates), ``end_position`` the last
+    section's end (the mass's ``(a, b)``); ``closing_turn`` links the
     last section back to the first; the mesh has at least ``intervals`` per section and one per
     ``interval_duration`` of it; ``min_speed`` is the floor of the blade's speed away from the
     rests; ``tol``, ``max_iter``, ``print_level``, ``barrier`` (IPOPT's ``mu_strategy``) and
@@ -105,6 +107,7 @@ class ProgramOptions:
     closing_turn: float | None = None
     start_position: tuple[float, float] | None = None
     start_rates: tuple[float, float] | None = None
+    end_position: tuple[float, float] | None = None
     intervals: int = 36
     interval_duration: float = 0.3
     top_speed: float = 1.0
@@ -183,6 +186,61 @@ def _rot(angle, v):
     return ca.vertcat(c * v[0] - s * v[1], s * v[0] + c * v[1])
 
 
+@dataclass(frozen=True, slots=True)
+class _PieceLayout:
+    """Where a piece's unknowns sit in the program's vector: its duration, node and collocation states, controls."""
+
+    T: int
+    X: int  # 6 x (N + 1), column-major
+    Xc: int  # 6 x (degree N)
+    W: int  # N
+    nodes: np.ndarray  # the mesh (only its proportions count)
+
+    @property
+    def N(self) -> int:
+        return self.nodes.size - 1
+
+    @property
+    def end(self) -> int:
+        return self.W + self.N
+
+    @property
+    def frac(self) -> np.ndarray:
+        return (self.nodes - self.nodes[0]) / (self.nodes[-1] - self.nodes[0])
+
+    def interval_index(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per interval, the entries of the vector that make its unknowns ``(x_k, x_c, w, h)``, and their scales."""
+        k = np.arange(self.N)
+        index = np.empty((8 + 6 * _DEGREE, self.N), dtype=np.int64)
+        index[0:6] = self.X + 6 * k + np.arange(6)[:, None]
+        index[6:6 + 6 * _DEGREE] = self.Xc + 6 * _DEGREE * k + np.arange(6 * _DEGREE)[:, None]
+        index[-2] = self.W + k
+        index[-1] = self.T
+        scale = np.ones(index.shape)
+        scale[-1] = np.diff(self.frac)  # an interval lasts the piece's duration times its fraction
+        return index, scale
+
+
+def _layout(sections: list[SectionSpec], o: ProgramOptions, meshes) -> tuple[list, int]:
+    """Per section its duration, default mesh, guess profile and pieces' layouts; and the number of unknowns."""
+    out, n = [], 0
+    for k, spec in enumerate(sections):
+        duration = spec.duration if math.isfinite(spec.duration) else 1.25 * spec.length
+        # at least ``intervals`` per section, and one per ``interval_duration`` of it: a long section
+        # on a fixed count plans too coarsely for the exact finish to mend (circle eight, serpentine)
+        count = max(o.intervals, math.ceil(duration / o.interval_duration))
+        default_mesh, s_v = _mesh(spec, duration, count)
+        lays = []
+        for nodes in (default_mesh if meshes is None else meshes[k]):
+            N = len(nodes) - 1
+            lay = _PieceLayout(T=n, X=n + 1, Xc=n + 1 + 6 * (N + 1), W=n + 1 + 6 * (N + 1) + 6 * _DEGREE * N,
+                               nodes=np.asarray(nodes, dtype=float))
+            lays.append(lay)
+            n = lay.end
+        out.append((duration, default_mesh, s_v, lays))
+    return out, n
+
+
 def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=None, meshes=None) -> ProgramSolution:
     """Build and solve the program of a chain of sections (one curve, or the unit of a repeated one).
 
@@ -194,173 +252,147 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     be given on the same nodes. Never raises for a program IPOPT cannot solve: the result says so.
     """
     o = options
-    meshes_in = meshes
     fn = sleigh_functions(o.M, o.m, o.I)
-    f, accel, xi2f, ratesf = fn["f"], fn["accel"], fn["xi2"], fn["rates"]
+    xi2f, ratesf = fn["xi2"], fn["rates"]
     tau, C, B = _radau()
-    opti = ca.Opti()
     interval = _interval_function(fn, C, B, o)
-    cost = 0
-    handles = []
+    layout, n = _layout(sections, o, meshes)
+    prog = SparseProgram(n)
+    reach2 = o.reach * o.reach
     prev_end = None  # (x, cf, s0) at the end of the previous section
     first_start = None
-    reach2 = o.reach * o.reach
-    for k, spec in enumerate(sections):
-        duration = spec.duration if math.isfinite(spec.duration) else 1.25 * spec.length
-        # at least ``intervals`` per section, and one per ``interval_duration`` of it: a long section
-        # on a fixed count plans too coarsely for the exact finish to mend (circle eight, serpentine)
-        n = max(o.intervals, math.ceil(duration / o.interval_duration))
-        default_mesh, s_v = _mesh(spec, duration, n)
-        meshes = default_mesh if meshes_in is None else meshes_in[k]
+    durations = []
+    for spec, (duration, default_mesh, s_v, lays) in zip(sections, layout):
         kg = max(spec.pieces, key=lambda p: p.length).coefficients[0]
         b_guess = -0.5 * o.reach if kg > 0 else 0.5 * o.reach
-        sec_T, sec_X, sec_W, sec_Xc = [], [], [], []
         s_start = 0.0
         x_prev_piece = None
-        for j, piece in enumerate(spec.pieces):
+        for j, (piece, lay) in enumerate(zip(spec.pieces, lays)):
             cf = ca.DM(list(piece.coefficients))
-            nodes = meshes[j]
-            frac = (nodes - nodes[0]) / (nodes[-1] - nodes[0])
-            N = frac.size - 1
-            T = opti.variable()
-            opti.subject_to(T >= 1e-6 * duration)
-            opti.set_initial(T, default_mesh[j][-1] - default_mesh[j][0])
-            X = opti.variable(6, N + 1)
-            Xc = opti.variable(6, _DEGREE * N)
-            W = opti.variable(1, N)
-            # the guess
-            tg = default_mesh[j][0] + (nodes - nodes[0]) / (nodes[-1] - nodes[0]) * (
-                default_mesh[j][-1] - default_mesh[j][0])
+            N = lay.N
+            X = prog.view(lay.X, 6, N + 1)
+            Xc = prog.view(lay.Xc, 6, _DEGREE * N)
+            g0, g1 = default_mesh[j][0], default_mesh[j][-1]
+            prog.linear(prog.x[lay.T], 1e-6 * duration, np.inf)
+            prog.x0[lay.T] = g1 - g0
+            tg = g0 + lay.frac * (g1 - g0)
             sg, vg = s_v(tg)
             kap = np.array([float(_kappa(piece.coefficients, s, s_start)) for s in sg])
-            M_, m_, I_ = o.M, o.m, o.I
-            p1g = (I_ + m_ * b_guess**2) * kap * vg - m_ * b_guess * vg
-            p2g = (M_ + m_) * vg - m_ * b_guess * kap * vg
+            p1g = (o.I + o.m * b_guess**2) * kap * vg - o.m * b_guess * vg
+            p2g = (o.M + o.m) * vg - o.m * b_guess * kap * vg
             Xg = np.vstack([p1g, p2g, np.zeros_like(tg), np.full_like(tg, b_guess), sg, np.zeros_like(tg)])
-            opti.set_initial(X, Xg)
-            opti.set_initial(Xc, np.repeat(Xg[:, 1:], _DEGREE, axis=1))
-            opti.set_initial(W, 0.0)
+            prog.x0[lay.X:lay.Xc] = Xg.ravel(order="F")
+            prog.x0[lay.Xc:lay.W] = np.repeat(Xg[:, 1:], _DEGREE, axis=1).ravel(order="F")
             if x_prev_piece is not None:
-                opti.subject_to(X[:, 0] == x_prev_piece)
-            hs = T * ca.DM(np.diff(frac)).T  # (1, N) interval lengths
-            defect, quad, path = interval.map(N)(X[:, :N], ca.reshape(Xc, 6 * _DEGREE, N), W, hs, cf, s_start)
-            opti.subject_to(ca.vec(defect) == 0)
-            opti.subject_to(X[:, 1:] == Xc[:, _DEGREE - 1::_DEGREE])
-            cost += ca.sum2(quad)
-            opti.subject_to(opti.bounded(0.0, ca.vec(path[0:_DEGREE, :]), o.top_speed))
-            # The blade keeps moving between the rests: a speed that only touches zero (the blade
-            # waiting at a rest while the mass moves, seen on the counter and the bracket) comes out
-            # slightly negative in the exact motion, a stall. The floor rises from the rests to
-            # min_speed (2 % of the glide) over a tenth of the section, at the collocation points' guessed times.
-            if o.min_speed > 0.0:
-                g0, g1 = default_mesh[j][0], default_mesh[j][-1]
-                tc = g0 + (frac[:-1, None] + np.diff(frac)[:, None] * tau[None, 1:]) * (g1 - g0)
-                ramp = np.minimum(1.0, np.minimum(tc, duration - tc) / (0.1 * duration))
-                opti.subject_to(ca.vec(path[0:_DEGREE, :]) >= ca.vec(ca.DM(o.min_speed * ramp.T)))
-            opti.subject_to(ca.vec(path[_DEGREE:2 * _DEGREE, :]) <= reach2)
-            row = 2 * _DEGREE
-            if o.singular_clearance > 0.0:
-                opti.subject_to(ca.vec(path[row:row + _DEGREE, :]) >= o.singular_clearance**2)
-                row += _DEGREE
-            if o.max_accel is not None:
-                opti.subject_to(ca.vec(path[row:row + _DEGREE, :]) <= o.max_accel**2)
-                row += _DEGREE
-            if o.max_rate is not None:
-                opti.subject_to(ca.vec(path[row:row + _DEGREE, :]) <= o.max_rate**2)
+                prog.linear(X[:, 0] - x_prev_piece)
+            index, scale = lay.interval_index()
+            tc = g0 + (lay.frac[:-1, None] + np.diff(lay.frac)[:, None] * tau[None, 1:]) * (g1 - g0)
+            prog.mapped(interval, index, scale, (cf, s_start), ((0.0, 0.0), "cost") + _path_bounds(o, tc.T, duration))
+            prog.linear(X[:, 1:] - Xc[:, _DEGREE - 1::_DEGREE])
             if j == 0:
-                opti.subject_to(X[4, 0] == 0.0)
-                opti.subject_to(xi2f(X[:, 0], 0.0, cf, s_start) == 0.0)
-                opti.subject_to(X[2, 0] ** 2 + X[3, 0] ** 2 <= reach2)
+                prog.linear(X[4, 0])
+                prog.constrain(xi2f(X[:, 0], 0.0, cf, s_start))
+                prog.constrain(X[2, 0] ** 2 + X[3, 0] ** 2, -np.inf, reach2)
                 start = (X[:, 0], cf, s_start)
-                if k == 0 and o.start_position is not None:
-                    opti.subject_to(X[2:4, 0] == ca.DM(list(o.start_position)))
-                if k == 0 and o.start_rates is not None:
-                    opti.subject_to(ratesf(X[:, 0], 0.0, cf, s_start) == ca.DM(list(o.start_rates)))
+                if prev_end is None and o.start_position is not None:
+                    prog.linear(X[2:4, 0] - ca.DM(list(o.start_position)))
+                if prev_end is None and o.start_rates is not None:
+                    prog.constrain(ratesf(X[:, 0], 0.0, cf, s_start) - ca.DM(list(o.start_rates)))
             x_prev_piece = X[:, N]
             s_start += piece.length
-            opti.subject_to(X[4, N] == s_start)  # the join (or the section's end) where the piece ends
-            sec_T.append(T)
-            sec_X.append(X)
-            sec_W.append(W)
-            sec_Xc.append(Xc)
+            prog.linear(X[4, N] - s_start)  # the join (or the section's end) where the piece ends
             last_cf = cf
-        x_end = sec_X[-1][:, -1]
+        x_end = x_prev_piece
         s_last = s_start - spec.pieces[-1].length
-        opti.subject_to(xi2f(x_end, 0.0, last_cf, s_last) == 0.0)
+        prog.constrain(xi2f(x_end, 0.0, last_cf, s_last))
+        Ts = sum(prog.x[lay.T] for lay in lays)
+        durations.append(Ts)
         if o.objective == "effort":
-            opti.subject_to(sum(sec_T) == duration)
+            prog.linear(Ts - duration)
         end = (x_end, last_cf, s_last)
         if prev_end is not None:
-            cost += _link(opti, prev_end, start, spec.turn, ratesf, o)
+            _link(prog, prev_end, start, spec.turn, ratesf, o)
         else:
             first_start = start
         prev_end = end
-        handles.append((sec_T, sec_X, sec_W, meshes, sec_Xc))
+    if o.end_position is not None and prev_end is not None:
+        prog.linear(prev_end[0][2:4] - ca.DM(list(o.end_position)))
     if o.closing_turn is not None and first_start is not None:
-        cost += _link(opti, prev_end, first_start, o.closing_turn, ratesf, o)
+        _link(prog, prev_end, first_start, o.closing_turn, ratesf, o)
     if o.objective == "time":
-        cost += sum(sum(h[0]) for h in handles)
-    opti.minimize(cost)
+        prog.minimize(sum(durations))
     if guess is not None:
-        _set_guess(opti, handles, guess)
+        _set_guess(prog, layout, guess)
     # IPOPT's barrier: adaptive updates take half the iterations of the monotone default on one
     # section; the linked program of a curve does better monotone from mu = 0.1 (245 against 361)
-    opti.solver("ipopt", {"expand": True, "print_time": False, "ipopt.print_level": o.print_level, "ipopt.sb": "yes",
-                          "ipopt.mu_strategy": o.barrier, "ipopt.mu_init": o.mu_init,
-                          "ipopt.max_iter": o.max_iter, "ipopt.tol": o.tol})
-    try:
-        sol = opti.solve()
-        ok = True
-    except RuntimeError:
-        sol = opti.debug
-        ok = False
-    stats = opti.stats()
-    status = str(stats.get("return_status", "unknown"))
+    res = prog.solve({"print_time": False, "error_on_fail": False, "ipopt.print_level": o.print_level,
+                      "ipopt.sb": "yes", "ipopt.mu_strategy": o.barrier, "ipopt.mu_init": o.mu_init,
+                      "ipopt.max_iter": o.max_iter, "ipopt.tol": o.tol})
+    ok, status = res.success, res.status
     message = status.replace("_", " ").lower()
     if not ok and status in _STALLED:
         # A feasible point where IPOPT could not prove optimality (one-foot eight: the constraints
         # met to 5e-13, the step computation failing on degenerate multipliers) is a plan: the
         # exact finish and the certified reach do not rely on its optimality.
-        inf_pr = stats.get("iterations", {}).get("inf_pr", [math.inf])
+        inf_pr = res.stats.get("iterations", {}).get("inf_pr", [math.inf])
         if inf_pr and inf_pr[-1] <= _FEASIBLE:
             ok = True
             message = f"feasible, optimality not proven ({message})"
     times, states, controls = [], [], []
-    for sec_T, sec_X, sec_W, meshes, _xc in handles:
+    for _duration, _mesh_k, _s_v, lays in layout:
         t0 = 0.0
         ts, xs, ws = [], [], []
-        for T, X, W, nodes in zip(sec_T, sec_X, sec_W, meshes):
-            Tv = float(sol.value(T))
-            frac = (nodes - nodes[0]) / (nodes[-1] - nodes[0])
-            ts.append(t0 + Tv * frac if not ts else (t0 + Tv * frac)[1:])
-            Xv = np.asarray(sol.value(X)).reshape(6, -1)
+        for lay in lays:
+            Tv = float(res.x[lay.T])
+            t = t0 + Tv * lay.frac
+            Xv = res.x[lay.X:lay.Xc].reshape(6, lay.N + 1, order="F")
+            ts.append(t if not ts else t[1:])
             xs.append(Xv if not xs else Xv[:, 1:])
-            ws.append(np.atleast_1d(sol.value(W)).ravel())
+            ws.append(res.x[lay.W:lay.end].copy())
             t0 += Tv
         times.append(np.concatenate(ts))
         states.append(np.hstack(xs))
         controls.append(np.concatenate(ws))
     return ProgramSolution(success=ok, status=status, message=message,
                            times=tuple(times), states=tuple(states), controls=tuple(controls),
-                           meshes=tuple(tuple(h[3]) for h in handles),
-                           objective=float(sol.value(cost)), iterations=int(stats.get("iter_count", 0)), stats={
-                               k: stats[k] for k in ("t_wall_total",) if k in stats})
+                           meshes=tuple(tuple(lay.nodes for lay in lays) for *_, lays in layout),
+                           objective=res.objective, iterations=res.iterations,
+                           stats={k: res.stats[k] for k in ("t_wall_total",) if k in res.stats})
+
+
+def _path_bounds(o: ProgramOptions, tc: np.ndarray, duration: float) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Bounds of the path rows of :func:`_interval_function` over a piece, at collocation times ``tc`` (degree x N).
+
+    The blade keeps moving between the rests: a speed that only touches zero (the blade waiting
+    at a rest while the mass moves, seen on the counter and the bracket) comes out slightly
+    negative in the exact motion, a stall. The floor rises from the rests to ``min_speed`` (2 %
+    of the glide) over a tenth of the section, at the collocation points' guessed times.
+    """
+    N = tc.shape[1]
+    ramp = np.minimum(1.0, np.minimum(tc, duration - tc) / (0.1 * duration))
+    out = [(np.maximum(0.0, o.min_speed * ramp), o.top_speed), (-np.inf, o.reach * o.reach)]
+    for lo, hi, on in ((o.singular_clearance**2, np.inf, o.singular_clearance > 0.0),
+                       (-np.inf, (o.max_accel or 0.0) ** 2, o.max_accel is not None),
+                       (-np.inf, (o.max_rate or 0.0) ** 2, o.max_rate is not None)):
+        if on:
+            out.append((lo, hi))
+    return tuple(out)
 
 
 def _interval_function(fn, C, B, o) -> ca.Function:
     """One collocation interval as a flat SX function, mapped over a piece's intervals.
 
-    Inputs ``(x_k, x_c (6 * degree), w, h, coefficients, s0)``; outputs the collocation defects,
-    the interval's share of the objective and the path quantities at the collocation points (rows:
-    speed ``xi2``, ``a^2 + b^2``, then as asked the squared distance from the singular point, the
-    squared acceleration and the squared rates). Building the program from one mapped function
-    keeps CasADi's derivative setup small: inlining every call cost seconds per solve.
+    Inputs ``(z, coefficients, s0)`` with ``z = (x_k, x_c (6 * degree), w, h)``; outputs the
+    collocation defects, the interval's share of the objective and the path quantities at the
+    collocation points (rows: speed ``xi2``, ``a^2 + b^2``, then as asked the squared distance
+    from the singular point, the squared acceleration and the squared rates). One function
+    mapped over the mesh keeps CasADi's setup small, and its Hessian is derived once
+    (:mod:`skatetrace.planning.nlp`).
     """
-    f, accel, xi2f, ratesf = fn["f"], fn["accel"], fn["xi2"], fn["rates"]
-    xk = ca.SX.sym("xk", 6)
-    xc = ca.SX.sym("xc", 6 * _DEGREE)
-    w = ca.SX.sym("w")
-    h = ca.SX.sym("h")
+    xi2f, ratesf = fn["xi2"], fn["rates"]
+    f = fn["f"]
+    z = ca.SX.sym("z", 8 + 6 * _DEGREE)
+    xk, xc, w, h = z[0:6], z[6:6 + 6 * _DEGREE], z[6 + 6 * _DEGREE], z[7 + 6 * _DEGREE]
     cf = ca.SX.sym("cf", 4)
     s0 = ca.SX.sym("s0")
     xs = [xk] + [xc[6 * r:6 * r + 6] for r in range(_DEGREE)]
@@ -386,39 +418,32 @@ def _interval_function(fn, C, B, o) -> ca.Function:
         sing.append(xr[2] ** 2 + (xr[3] - bs) ** 2)
         acc.append(ca.sumsqr(A))
         rate.append(ca.sumsqr(ratesf(xr, w, cf, s0)))
-    rows = speed + reach
-    if o.singular_clearance > 0.0:
-        rows += sing
-    if o.max_accel is not None:
-        rows += acc
-    if o.max_rate is not None:
-        rows += rate
-    return ca.Function("interval", [xk, xc, w, h, cf, s0],
-                       [ca.vertcat(*defects), quad, ca.vertcat(*rows)])
+    paths = [speed, reach] + [rows for rows, on in ((sing, o.singular_clearance > 0.0), (acc, o.max_accel is not None),
+                                                    (rate, o.max_rate is not None)) if on]
+    return ca.Function("interval", [z, cf, s0], [ca.vertcat(*defects), quad] + [ca.vertcat(*rows) for rows in paths])
 
 
-def _link(opti, end, start, turn, ratesf, o):
-    """Position (and velocity) of the mass on the ice continuous from ``end`` to ``start``; returns any penalty."""
+def _link(prog: SparseProgram, end, start, turn, ratesf, o) -> None:
+    """Position (and velocity) of the mass on the ice continuous from ``end`` to ``start``, or its jump penalised."""
     x_end, cf_e, s_e = end
     x_start, cf_s, s_s = start
-    opti.subject_to(x_start[2:4] == _rot(turn, x_end[2:4]))
+    prog.linear(x_start[2:4] - _rot(turn, x_end[2:4]))
     v_end = _rot(turn, ratesf(x_end, 0.0, cf_e, s_e))
     v_start = ratesf(x_start, 0.0, cf_s, s_s)
     if o.continuous_velocity:
-        opti.subject_to(v_start == v_end)
-        return 0
-    return (o.m * o.m) * ca.sumsqr(v_start - v_end) / o.impulse_time
+        prog.constrain(v_start - v_end)
+    else:
+        prog.minimize((o.m * o.m) * ca.sumsqr(v_start - v_end) / o.impulse_time)
 
 
-def _set_guess(opti, handles, guess: ProgramSolution) -> None:
+def _set_guess(prog: SparseProgram, layout, guess: ProgramSolution) -> None:
     """Start from a solution of the same program (e.g. at another reach)."""
-    for (sec_T, sec_X, sec_W, meshes, sec_Xc), times, X, W in zip(handles, guess.times, guess.states,
-                                                                   guess.controls):
+    for (*_, lays), times, X, W in zip(layout, guess.times, guess.states, guess.controls):
         i = 0
-        for T, Xv, Wv, nodes, Xc in zip(sec_T, sec_X, sec_W, meshes, sec_Xc):
-            N = nodes.size - 1
-            opti.set_initial(T, times[i + N] - times[i])
-            opti.set_initial(Xv, X[:, i:i + N + 1])
-            opti.set_initial(Wv, W[i:i + N])
-            opti.set_initial(Xc, np.repeat(X[:, i + 1:i + N + 1], _DEGREE, axis=1))
+        for lay in lays:
+            N = lay.N
+            prog.x0[lay.T] = times[i + N] - times[i]
+            prog.x0[lay.X:lay.Xc] = X[:, i:i + N + 1].ravel(order="F")
+            prog.x0[lay.W:lay.end] = W[i:i + N]
+            prog.x0[lay.Xc:lay.W] = np.repeat(X[:, i + 1:i + N + 1], _DEGREE, axis=1).ravel(order="F")
             i += N
