@@ -74,3 +74,16 @@ def test_many_spans_at_once_sample_as_each_alone():
     for k, (lo, hi) in enumerate(zip(bounds[:-1], bounds[1:])):
         alone = sample_adaptively(lambda t, _k=k: tuple(gain[_k] * v for v in _fn(t)), lo, hi)
         np.testing.assert_array_equal(spans[k], alone)
+
+
+def test_a_span_of_zero_length_is_sampled_without_warnings():
+    # a planned piece of no duration puts two breakpoints at one time
+    import warnings
+
+    bounds = np.array([0.0, 1.0, 1.0, 2.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        spans = sample_intervals(lambda t, left: _fn(t), bounds)
+    assert len(spans) == 3
+    assert np.all(spans[1] == 1.0)
+    np.testing.assert_array_equal(spans[0], sample_adaptively(_fn, 0.0, 1.0))

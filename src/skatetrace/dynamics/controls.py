@@ -172,11 +172,14 @@ def sample_intervals(fn, bounds, *, value_tol: float = 1e-11, rate_tol: float = 
         # The Hermite cubic's value error peaks at the midpoint; its derivative error vanishes
         # there and peaks near u = 0.21 and 0.79, so the rates are checked at u = 1/4 (97% of it).
         value = 0.5 * (y0 + y1) + h * (d0 - d1) / 8.0
-        rate = 1.125 * (y1 - y0) / h + 0.1875 * d0 - 0.3125 * d1
-        # Below the rounding error of the difference quotient (y1 - y0) / h no halving can help.
-        floor = 16.0 * np.finfo(float).eps * v_scale[k] / h
-        value_excess = np.max(np.abs(value - vm[:2]), axis=0) / (value_tol * v_scale[k])
-        rate_excess = np.max(np.abs(rate - vq[2:4]), axis=0) / (rate_tol * r_scale[k] + floor)
+        # a span of zero length (two breakpoints at one time: a planned piece of no duration) has
+        # nothing to check and is never split (h <= 2 h_min below): its quotients are left as NaN
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rate = 1.125 * (y1 - y0) / h + 0.1875 * d0 - 0.3125 * d1
+            # Below the rounding error of the difference quotient (y1 - y0) / h no halving can help.
+            floor = 16.0 * np.finfo(float).eps * v_scale[k] / h
+            value_excess = np.max(np.abs(value - vm[:2]), axis=0) / (value_tol * v_scale[k])
+            rate_excess = np.max(np.abs(rate - vq[2:4]), axis=0) / (rate_tol * r_scale[k] + floor)
         # Intervals are not split below h_min: where the values come from a piecewise interpolant
         # (an ODE solver's dense output) their slope may jump between steps by more than the rate
         # tolerance, and no splitting would ever satisfy it there.
