@@ -174,6 +174,7 @@ class SparseProgram:
         g = ca.vertcat(*self._g) if self._g else ca.SX(0, 1)
         nlp = {"x": self.x, "f": self._f_blocks + self._f_rest, "g": g}
         opts = dict(options)
+        opts.setdefault("error_on_fail", False)
         opts["hess_lag"] = self._hessian()
         solver = ca.nlpsol("plan", "ipopt", nlp, opts)
         lbg = np.concatenate(self._lbg) if self._lbg else np.zeros(0)
