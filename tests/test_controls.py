@@ -87,3 +87,21 @@ def test_a_span_of_zero_length_is_sampled_without_warnings():
     assert len(spans) == 3
     assert np.all(spans[1] == 1.0)
     np.testing.assert_array_equal(spans[0], sample_adaptively(_fn, 0.0, 1.0))
+
+
+def test_a_span_of_a_few_ulps_is_not_split_forever():
+    # Two breakpoints apart by round-off, the values stepping inside (two pieces finished apart):
+    # every midpoint rounds onto an end of the span, so no split can help.
+    lo = 10.0
+    hi = lo + 8 * np.spacing(lo)
+    calls = []
+
+    def fn(t, left):
+        calls.append(t.size)
+        a, b, ad, bd = _fn(t)
+        return a + 1e-9 * (t > lo + 4 * np.spacing(lo)), b, ad, bd
+
+    spans = sample_intervals(fn, np.array([0.0, lo, hi, 20.0]), value_tol=1e-14, rate_tol=1e-12)
+    assert len(spans) == 3
+    assert np.all((spans[1] >= lo) & (spans[1] <= hi)) and spans[1].size <= 16  # left as first sampled
+    assert len(calls) < 100

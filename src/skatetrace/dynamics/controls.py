@@ -152,7 +152,10 @@ def sample_intervals(fn, bounds, *, value_tol: float = 1e-11, rate_tol: float = 
     v_scale = np.maximum(np.max(np.abs(v[:2]), axis=0).reshape(nspan, n0).max(axis=1), 1e-300)
     r_scale = np.maximum(np.max(np.abs(v[2:4]), axis=0).reshape(nspan, n0).max(axis=1), 1e-300)
     todo = np.flatnonzero(~end)  # intervals [t[i], t[i + 1]] still to check
-    h_min = min_step * np.diff(bounds)
+    # Intervals are never split below the resolution of the times either: in a span a few ulps long (two
+    # breakpoints apart by round-off) a midpoint rounds onto an end, and splitting a step in the
+    # values there added copies of it until max_points (one-foot eight's plan: hours).
+    h_min = np.maximum(min_step * np.diff(bounds), 64.0 * np.finfo(float).eps * np.max(np.abs(bounds), initial=0.0))
     while todo.size:
         # spans grown to max_points are left as they are
         todo = todo[np.bincount(span, minlength=nspan)[span[todo]] < max_points]
