@@ -29,7 +29,7 @@ import math
 from .model import SleighParams
 
 __all__ = ["PAPER_PARAMS", "SEGMENT_MASS_FRACTIONS", "MOVING_FRACTION", "TRUNK_RADIUS_PER_HEIGHT", "REACH_PER_HEIGHT",
-           "skater_params", "skater_reach"]
+           "IMPULSE_TIME", "skater_params", "skater_reach"]
 
 PAPER_PARAMS = SleighParams(M=2.0, m=1.0, I=3.0)
 """The paper's parameters ``M = 2, m = 1, I = 3`` (dimensionless, length scale 1)."""
@@ -55,6 +55,12 @@ TRUNK_RADIUS_PER_HEIGHT = 0.15 / 1.7
 #: trunk's length of the skating leg: a comfortable range, well inside the 0.5 H beyond which the
 #: feasibility check (:mod:`skatetrace.verification.feasibility`) calls a motion impossible.
 REACH_PER_HEIGHT = 0.288
+
+#: The time over which a cusp's impulse counts as delivered in the effort (s, or the model's time
+#: unit): an impulse ``J`` spread evenly over ``IMPULSE_TIME`` adds ``|J|^2 / IMPULSE_TIME`` to the
+#: integral of the squared force. The least-effort planner penalises the mass's velocity jumps by
+#: the same, and the feasibility report measures them so (``cusp_effort``).
+IMPULSE_TIME = 0.1
 
 
 def skater_reach(height: float = 1.7) -> float:

@@ -5,20 +5,24 @@ For each curve, in skating order:
 1. every section is posed in its travel frame (:class:`~skatetrace.planning.collocation.SectionSpec`),
    with the turn that carries the mass's position from the end of one section into the next
    (pivots and reversals);
-2. a warm start: every distinct section planned on its own by IPOPT from a launch-glide-stop guess;
-3. the whole curve as one multi-phase program from that start: the position of the mass on the
+2. a warm start (:func:`_warm_start`): every distinct section planned on its own by IPOPT from a
+   launch-glide-stop guess, the mass pinned on the blade's line ahead of the contact point at
+   every cusp, so that the chain of sections is already continuous on the ice;
+3. the whole curve as one multi-phase program from that chain: the position of the mass on the
    ice continuous through every cusp (a hard constraint), the jump of its velocity (an impulse)
-   penalised as the effort of delivering it over ``impulse_time``; its mesh then refined twice
-   against the compiled integrator (:mod:`skatetrace.planning.mesh`);
+   penalised as the effort of delivering it over ``impulse_time``; where IPOPT cannot solve it,
+   the chain itself is the plan;
 4. the exact finish of every section (:func:`~skatetrace.planning.finish.finish_section`), each
    starting exactly where the previous one ended, and the reach checked between samples; where
-   the exact motion leaves the reach, the curve is planned again inside a smaller one.
+   a finish stalls, the plan's mesh is refined against the compiled integrator
+   (:mod:`skatetrace.planning.mesh`), and where the exact motion leaves the reach, the curve is
+   planned again inside a smaller one.
 
 Sections come back as :class:`~skatetrace.tracing.sections.SectionTrace` objects (one phase per affine
 piece of the control), so everything downstream (replay, outputs) treats them like any other.
 A section that cannot be planned within the reach is returned as data (``TraceStatus.INFEASIBLE``,
-with the smallest of a few larger reaches within which it plans on its own), a curve whose linked
-program IPOPT cannot solve as ``TraceStatus.NOT_PLANNED``.
+with the smallest of a few larger reaches within which it plans on its own), a section whose exact
+finish does not converge as ``TraceStatus.RESIDUAL``.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import math
 import numpy as np
 
 from ..dynamics.model import SleighParams
+from ..dynamics.presets import IMPULSE_TIME
 from ..figures.figure import Figure
 from ..figures.geometry import end_pose
 from ..tracing.maneuver import _singular_distances
@@ -67,6 +72,14 @@ def curve_specs(curve) -> tuple[list[SectionSpec], list]:
     return specs, sections
 
 
+def _closing_turn(curve, sections) -> float | None:
+    """The turn from a closed curve's end into its start (skated again from where it ends); None if it is open."""
+    if not curve.closure()["closed"]:
+        return None
+    last = sections[-1].pieces[-1]
+    return end_pose(last.start, last.segment).heading - sections[0].pieces[0].start.heading
+
+
 def _program_options(params: SleighParams, options: TraceOptions) -> ProgramOptions:
     tot = params.M + params.m
     v2 = options.speed ** 2
@@ -81,7 +94,8 @@ def _program_options(params: SleighParams, options: TraceOptions) -> ProgramOpti
         # within impulse_time: held continuous instead (school three at 0.49 m), the program moved the
         # same change of momentum into the few milliseconds after the cusp, where its mesh does not see
         # the effort (312 m/s^2, 6.4 kN in the exact motion, against 42 m/s^2 with the penalty).
-        singular_clearance=0.15 * options.reach, continuous_velocity=False, impulse_time=0.1, tol=1e-6,
+        singular_clearance=0.15 * options.reach, continuous_velocity=False,
+        impulse_time=IMPULSE_TIME * options.speed, tol=1e-6,  # in the program's time, a glide at speed 1
         top_speed=TOP_SPEED,
     )
 
@@ -93,20 +107,106 @@ def _rates(fn, X, spec: SectionSpec, at_end: bool):
     return np.asarray(fn["rates"](x, 0.0, list(piece.coefficients), s0)).ravel()
 
 
-def _warm_start(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None]:
-    """Every section on its own, from a launch-glide-stop guess: the start of the linked program.
+#: Where the warm start puts the mass at a cusp: on the blade's line, this fraction of the reach
+#: ahead of the contact point in the next section's direction of travel. The linked programs of
+#: the circle eight and the three put it there (0.57-0.73 of the reach); sections planned with
+#: free ends put it at opposite ends of the reach instead (behind at a start, ahead at a stop),
+#: 0.98 m apart at 0.5 m, which the linked program then had to undo, or could not.
+_CUSP_AHEAD = 0.6
 
-    Sections with the same pieces share one solve (school figures repeat theirs). Returns the
-    guess, or None and the index of the first section that has no plan on its own.
+
+def _cusp_pins(specs, reach: float, closing_turn: float = 0.0) -> list[tuple]:
+    """Per section, the mass's position at its start and end in the warm start.
+
+    At every cusp :data:`_CUSP_AHEAD` of the reach ahead of the contact point, and so at the
+    curve's own start and end too, as if the curve were skated again (``closing_turn`` from its
+    end to its start: 0 for an open curve). Left free there, the ends went where the replay is
+    ill-conditioned: the rocker's and the bracket's final rests replayed at 3e-7 and 7e-8 of
+    their fastest motion, against 7e-9 and 8e-9 pinned.
+    """
+    ahead = _CUSP_AHEAD * reach
+    pins = []
+    for k in range(len(specs)):
+        turn = specs[k + 1].turn if k + 1 < len(specs) else closing_turn
+        # the next section's start carried back through the cusp: (a, b)_end = R(-turn) (ahead, 0)
+        pins.append(((ahead, 0.0), (ahead * math.cos(turn), -ahead * math.sin(turn))))
+    return pins
+
+
+def _warm_start(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None, tuple[bool, ...]]:
+    """Every section on its own, the mass pinned at the cusps (:data:`_CUSP_AHEAD`): the start of the linked program.
+
+    Pinned at the same place on both sides of every cusp, the sections chain with the mass's
+    position on the ice continuous; only its velocity may jump. A section that cannot be planned
+    pinned is planned with free ends. Sections with the same pieces and pins, or mirrored ones,
+    share one solve: school figures repeat and mirror theirs. Returns the guess and, per section,
+    whether its start continues the previous section's end (False for the first); or None and
+    the index of the first section that has no plan on its own.
     """
     solved: dict = {}
-    for k, spec in enumerate(specs):
-        if spec.pieces not in solved:
-            sol = solve_program([dataclasses.replace(spec, turn=0.0)], popts)
-            if not sol.success:
-                return None, k
-            solved[spec.pieces] = sol
-    return _chain([solved[spec.pieces] for spec in specs], "warm start"), None
+
+    def pin_key(q, sign):
+        # to 10 digits of the reach, +0.0 for -0.0: pins of mirrored sections come from one cos and
+        # sin and differ by round-off (3.6e-17 against -3.6e-17 on the paragraph three)
+        return None if q is None else tuple(round(v / popts.reach, 10) + 0.0 for v in (q[0], sign * q[1]))
+
+    def solve(spec, start, end, guess=None):
+        key, sign = _shape_key(spec)
+        key = (key, pin_key(start, sign), pin_key(end, sign), guess is not None)
+        if key not in solved:
+            opts = dataclasses.replace(popts, start_position=start, end_position=end, closing_turn=None)
+            if guess is not None:  # a free plan of the same section, pulled onto the pins
+                opts = _linked_options(opts)
+            solved[key] = (solve_program([dataclasses.replace(spec, turn=0.0)], opts, guess=guess,
+                                         meshes=None if guess is None else guess.meshes), sign)
+        sol, solved_sign = solved[key]
+        return sol if sign == solved_sign or not sol.success else _mirrored(sol)
+
+    sols, pinned = [], []
+    closing = 0.0 if popts.closing_turn is None else popts.closing_turn
+    for k, (spec, (start, end)) in enumerate(zip(specs, _cusp_pins(specs, popts.reach, closing))):
+        sol = solve(spec, start, end)
+        ends = (start is not None, end is not None)
+        if not sol.success:
+            # IPOPT may not find the pinned plan from the launch-glide-stop guess (paragraph three's
+            # second circle, 500 iterations) but from the plan with free ends (9 s); else the free plan
+            sol, ends = solve(spec, None, None), (False, False)
+            if sol.success:
+                again = solve(spec, start, end, guess=sol)
+                if again.success:
+                    sol, ends = again, (True, True)
+        if not sol.success:
+            return None, k, ()
+        sols.append(sol)
+        pinned.append(ends)
+    continues = tuple(k > 0 and pinned[k - 1][1] and pinned[k][0] for k in range(len(specs)))
+    return _chain(sols, "warm start"), None, continues
+
+
+def _shape_key(spec: SectionSpec) -> tuple[tuple, int]:
+    """What makes two sections the same program up to a mirror (to 12 digits), and the mirror's sign.
+
+    The sign is that of the first non-zero curvature coefficient: a section and its mirror image
+    have the same key and opposite signs.
+    """
+    coefficients = [c for p in spec.pieces for c in p.coefficients]
+    sign = next((1 if c > 0 else -1 for c in coefficients if c != 0.0), 1)
+    key = tuple((tuple(float(f"{sign * c:.12g}") for c in p.coefficients), float(f"{p.length:.12g}"))
+                for p in spec.pieces)
+    return key, sign
+
+
+def _mirrored(sol: ProgramSolution) -> ProgramSolution:
+    """The plan of the mirror image of a single section: ``p1`` and ``b`` change sign, the rest is kept.
+
+    Mirroring the ice (``y -> -y``) turns every curvature, the heading's rate, the angular
+    momentum ``p1`` and the mass's lateral offset ``b`` to their opposites and keeps ``p2``, ``a``,
+    the arc length and the free control ``u`` (:mod:`skatetrace.planning.symbolic`); the effort,
+    the reach and the clearance from the mirrored singular point are unchanged.
+    """
+    states = sol.states[0].copy()
+    states[[0, 3]] *= -1.0
+    return dataclasses.replace(sol, states=(states,))
 
 
 def _chain(sols: list[ProgramSolution], status: str) -> ProgramSolution:
@@ -133,81 +233,80 @@ def smallest_reach(spec: SectionSpec, popts: ProgramOptions) -> float | None:
     None if none of them does.
     """
     for factor in _LARGER_REACHES:
-        wider = dataclasses.replace(popts, reach=popts.reach * factor, singular_clearance=popts.singular_clearance * factor)
+        wider = dataclasses.replace(popts, reach=popts.reach * factor, singular_clearance=popts.singular_clearance * factor,
+                                    closing_turn=None)
         if solve_program([dataclasses.replace(spec, turn=0.0)], wider).success:
             return popts.reach * factor
     return None
 
 
 #: Largest defect of a collocation interval against the exact integration (relative, see
-#: :mod:`skatetrace.planning.mesh`) before the plan is handed to the exact finish, and the rounds
-#: of refinement allowed to reach it.
+#: :mod:`skatetrace.planning.mesh`) that a plan whose exact finish stalls is refined to.
 _MESH_TOL = 1e-5
-_MESH_ROUNDS = 2
+#: The linked program starts from a feasible chain (the warm start): a small barrier parameter
+#: takes a third to a half fewer iterations (circle eight 38 against 137), and a program that has
+#: not converged in this many iterations is left for the chain.
+_LINKED_MU = 1e-4
+_LINKED_ITER = 300
 
 
-def _refine(plan: ProgramSolution, specs, popts: ProgramOptions) -> ProgramSolution:
-    """Split the intervals whose defect exceeds ``_MESH_TOL`` and solve again, a few rounds at most."""
-    for _ in range(_MESH_ROUNDS):
-        errors = interval_errors(plan, specs, popts.M, popts.m, popts.I, popts.reach)
-        if max(float(np.max(e)) for e in errors) <= _MESH_TOL:
-            break
-        meshes, guess, _n = refined(plan, errors, _MESH_TOL)
-        again = solve_program(specs, dataclasses.replace(popts, mu_init=1e-4), guess=guess, meshes=meshes)
-        if not again.success:
-            break
-        plan = again
-    return plan
+def _linked_options(popts: ProgramOptions) -> ProgramOptions:
+    return dataclasses.replace(popts, barrier="monotone", mu_init=_LINKED_MU, max_iter=_LINKED_ITER)
 
 
-def _plan_curve(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None, tuple[str, ...]]:
-    """The curve as one program from the sections planned on their own, its mesh then refined.
+def _plan_curve(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None, tuple[str, ...], bool]:
+    """The curve as one program from the warm start (:func:`_warm_start`), else the warm start itself.
 
-    Where IPOPT cannot solve the linked program (the serpentine at 0.5 m: 1000 iterations), the
-    sections are planned one after another instead, each from where the previous one left the
-    mass (:func:`_one_after_another`). Returns the plan, the index of a section that has no plan
-    on its own (else None) and how each section meets the one before (:func:`_finish_curve`).
+    Returns the plan, the index of a section that has no plan on its own (else None), how each
+    section meets the one before (:func:`_finish_curve`) and whether the plan is the linked
+    program's. Where IPOPT cannot solve the linked program, the warm start's chain is the plan:
+    the mass's position on the ice is continuous wherever both sections were planned pinned at
+    the cusp (``"impulse"``), and jumps where one could not be (``"jump"``: reported, never hidden).
     """
-    guess, bad = _warm_start(specs, popts)
+    guess, bad, continues = _warm_start(specs, popts)
     if guess is None:
-        return None, bad, ()
-    links = ("start",) + ("impulse",) * (len(specs) - 1)
-    if len(specs) == 1:
-        return _refine(guess, specs, popts), None, links
-    linked = dataclasses.replace(popts, barrier="monotone")
-    plan = solve_program(specs, linked, guess=guess)
-    if plan.success:
-        return _refine(plan, specs, linked), None, links
-    plan, links = _one_after_another(specs, popts, guess)
-    return plan, None, links
+        return None, bad, (), False
+    if len(specs) > 1:
+        linked = solve_program(specs, _linked_options(popts), guess=guess, meshes=guess.meshes)
+        if linked.success:
+            return linked, None, ("start",) + ("impulse",) * (len(specs) - 1), True
+    links = tuple("start" if k == 0 else ("impulse" if c else "jump") for k, c in enumerate(continues))
+    return guess, None, links, False
 
 
-def _one_after_another(specs, popts: ProgramOptions, guess: ProgramSolution):
-    """Each section from where the previous one's plan left the mass (position on the ice), else from its own start.
+def _replan(plan: ProgramSolution, specs, popts: ProgramOptions, links, linked: bool, guess=None,
+            meshes=None) -> ProgramSolution:
+    """The program that made ``plan`` solved again with ``popts`` (or on ``meshes``), from ``guess`` (default the plan).
 
-    Returns the plan and the links: ``"impulse"`` where a section starts where the previous one
-    ended (its velocity may jump), ``"jump"`` where it could not and starts from its own plan
-    (the mass's position jumps: reported, never hidden).
+    A linked plan is solved again as one program; a chain section by section, each pinned where
+    the plan has the mass continuous through a cusp (``links``).
     """
-    sols, links = [], []
+    guess = plan if guess is None else guess
+    meshes = plan.meshes if meshes is None else meshes
+    if linked:
+        return solve_program(specs, _linked_options(popts), guess=guess, meshes=meshes)
+    sols = []
     for k, spec in enumerate(specs):
-        alone = [dataclasses.replace(spec, turn=0.0)]
-        own = _section_of(guess, k)
-        sol, opts = None, popts
-        if sols:
-            end = RestState(float(sols[-1].states[0][2, -1]), float(sols[-1].states[0][3, -1]), 0.0, 0.0)
-            moved = end.turned(spec.turn)
-            # the previous plan may end on the reach's boundary, a few 1e-9 outside in round-off
-            inside = min(1.0, popts.reach / max(math.hypot(moved.a, moved.b), 1e-300))
-            opts = dataclasses.replace(popts, start_position=(moved.a * inside, moved.b * inside))
-            sol = solve_program(alone, opts, guess=own, meshes=own.meshes)
-        if sol is not None and sol.success:
-            links.append("impulse")
-        else:
-            sol, opts = own, popts
-            links.append("start" if k == 0 else "jump")
-        sols.append(_refine(sol, alone, opts))
-    return _chain(sols, "one after another"), tuple(links)
+        X = guess.states[k]
+        start = (float(X[2, 0]), float(X[3, 0])) if links[k] == "impulse" else None
+        end = (float(X[2, -1]), float(X[3, -1])) if k + 1 < len(specs) and links[k + 1] == "impulse" else None
+        opts = dataclasses.replace(popts, mu_init=_LINKED_MU, start_position=start, end_position=end, closing_turn=None)
+        sol = solve_program([dataclasses.replace(spec, turn=0.0)], opts, guess=_section_of(guess, k),
+                            meshes=meshes[k:k + 1])
+        if not sol.success:
+            return sol
+        sols.append(sol)
+    return _chain(sols, "warm start")
+
+
+def _refine(plan: ProgramSolution, specs, popts: ProgramOptions, links, linked: bool) -> ProgramSolution | None:
+    """The plan on a mesh refined where its defect exceeds ``_MESH_TOL``; None if no interval does, or IPOPT fails."""
+    errors = interval_errors(plan, specs, popts.M, popts.m, popts.I, popts.reach)
+    if max(float(np.max(e)) for e in errors) <= _MESH_TOL:
+        return None
+    meshes, guess, _n = refined(plan, errors, _MESH_TOL)
+    again = _replan(plan, specs, popts, links, linked, guess=guess, meshes=meshes)
+    return again if again.success else None
 
 
 def plan_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
@@ -234,34 +333,12 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     total = sum(len(c.sections()) for c in figure.curves)
     for ci, curve in enumerate(figure.curves):
         specs, sections = curve_specs(curve)
-        curve_opts = popts
-        plan, bad, links = _plan_curve(specs, curve_opts)
+        curve_opts = dataclasses.replace(popts, closing_turn=_closing_turn(curve, sections))
+        plan, bad, links, linked = _plan_curve(specs, curve_opts)
         if plan is None:
-            curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, popts)
+            curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
         else:
-            curve_traces = _finish_curve(plan, links, specs, sections, ci, params, options, fn)
-        for _ in range(_MARGIN_ROUNDS):
-            # The exact motion strays from the plan by the collocation's error: where it leaves the
-            # reach, plan again inside a reach shrunk by the excess (the plan as the guess). Where an
-            # exact finish stalls (multiple shooting stuck near 1e-9 on a nearly singular Jacobian:
-            # circle eight at 0.5 m, condition 2e10), the same with the reach 1 % smaller: a nearby
-            # plan, whose finish converges.
-            worst = max((tr.metrics.get("reach", 0.0) for tr in curve_traces if tr.metrics), default=0.0)
-            stalled = any(tr.status is TraceStatus.RESIDUAL for tr in curve_traces)
-            if plan is None or not plan.success or not (worst > options.reach or stalled):
-                break
-            factor = options.reach / worst if worst > options.reach else 1.0
-            shrunk = dataclasses.replace(curve_opts, reach=curve_opts.reach * factor * 0.99)
-            if plan.status == "one after another":
-                again, again_links = _one_after_another(specs, shrunk, plan)
-            else:
-                again = solve_program(specs, dataclasses.replace(shrunk, barrier="monotone", mu_init=1e-4), guess=plan,
-                                      meshes=plan.meshes)
-                again_links = links
-            if not again.success:
-                break
-            plan, curve_opts, links = again, shrunk, again_links
-            curve_traces = _finish_curve(plan, links, specs, sections, ci, params, options, fn)
+            curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
         for tr in curve_traces:
             traces.append(tr)
             starts.append(t)
@@ -271,8 +348,40 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))
 
 
-#: Rounds of planning again inside a smaller reach when the exact motion leaves it or a finish stalls.
-_MARGIN_ROUNDS = 2
+def _mended(plan, links, linked, specs, sections, ci, params, options, popts, fn) -> list[SectionTrace]:
+    """The curve's plan finished exactly, then planned again where the exact motion falls short.
+
+    Where an exact finish stalls (multiple shooting stuck near 1e-9 on a nearly singular
+    Jacobian, or the blade coming to rest inside a section), the plan is first refined where its
+    collocation errs; where the exact motion leaves the reach (it strays from the plan by the
+    collocation's error), or the finish still stalls, it is planned again inside a reach shrunk
+    by the excess (and by 1 %: a nearby plan, whose finish converges), the plan as the guess.
+    """
+    traces = _finish_curve(plan, links, specs, sections, ci, params, options, fn)
+    curve_opts, refinable = popts, True
+    for _ in range(_MARGIN_ROUNDS):
+        worst = max((tr.metrics.get("reach", 0.0) for tr in traces if tr.metrics), default=0.0)
+        stalled = any(tr.status in (TraceStatus.RESIDUAL, TraceStatus.EXCURSION) for tr in traces)
+        if not (worst > options.reach or stalled):
+            break
+        again = None
+        if stalled and refinable:
+            refinable = False
+            again = _refine(plan, specs, curve_opts, links, linked)
+        if again is None:
+            factor = options.reach / worst if worst > options.reach else 1.0
+            shrunk = dataclasses.replace(curve_opts, reach=curve_opts.reach * factor * 0.99)
+            again = _replan(plan, specs, shrunk, links, linked)
+            if not again.success:
+                break
+            curve_opts = shrunk
+        plan = again
+        traces = _finish_curve(plan, links, specs, sections, ci, params, options, fn)
+    return traces
+
+
+#: Rounds of planning again (refined, or inside a smaller reach) when the exact motion leaves the reach or a finish stalls.
+_MARGIN_ROUNDS = 3
 #: Collocation intervals per shooting segment of the exact finish, longest first: over long
 #: segments the integration's round-off, grown by the sleigh's instability, holds the continuity
 #: residuals near 1e-9 (circle eight at 3); shorter ones reach 1e-10.

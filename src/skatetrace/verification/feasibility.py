@@ -60,6 +60,7 @@ import numpy as np
 
 from ..dynamics.controls import ControlSchedule
 from ..dynamics.model import SleighParams, mass_energy, mass_velocity
+from ..dynamics.presets import IMPULSE_TIME
 
 __all__ = ["CHECK_TITLES", "PAPER_FIGURE_SIZE", "HumanLimits", "FeasibilityCheck", "Feasibility", "assess_feasibility", "exported_peaks"]
 
@@ -436,8 +437,10 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
             # the mass's speed relative to the stopped blade (it carries the angular momentum there)
             "max_cusp_impulse": float(params.m * np.max(dv_cusp)) if n else 0.0,
             "max_cusp_mass_speed": float(cusp_speed), "impulse_unit": "N s" if limits.unit == "m" else "model units",
-            # the least-effort planner's objective, measured on the rows: the integral of |m acc|^2
+            # the least-effort planner's objective, measured on the rows: the integral of |m acc|^2,
+            # and the impulses at the cusps as the effort of delivering each within IMPULSE_TIME
             "effort": _effort(params.m, t, acc, cut),
+            "cusp_effort": float(np.sum((params.m * dv_cusp) ** 2) / IMPULSE_TIME) if n else 0.0,
             "rows": n}
     failed = [c for c in checks if not c.passed]
     if n == 0:
