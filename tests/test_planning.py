@@ -185,3 +185,18 @@ def test_a_mirrored_section_is_the_mirror_image_of_the_motion():
                            controls=(np.ones(3),))
     np.testing.assert_array_equal(_mirrored(plan).states[0], flip[:, None] * states)
 
+
+def test_the_mesh_of_a_symmetric_section_has_no_interval_of_round_off():
+    # A bracket's section is symmetric about its middle join, where a node of the section's mesh
+    # falls within round-off of the join: left in, its interval of 1e-16 made IPOPT's Hessian NaN.
+    from skatetrace.planning.collocation import PieceSpec, SectionSpec, _mesh
+
+    for n in (36, 40, 54, 80):
+        pieces = (PieceSpec((7.1429, 0.0, 0.0, 0.0), 0.2126), PieceSpec((-0.3922, 0.0, 0.0, 0.0), 7.8783),
+                  PieceSpec((0.3922, 0.0, 0.0, 0.0), 7.8783), PieceSpec((-7.1429, 0.0, 0.0, 0.0), 0.2126))
+        spec = SectionSpec(pieces, 0.0, 20.0)
+        meshes, _ = _mesh(spec, spec.duration, n)
+        # the pieces' meshes meet at their joins, and no interval is far shorter than the grading's
+        assert all(a[-1] == b[0] for a, b in zip(meshes[:-1], meshes[1:]))
+        smallest = min(np.min(np.diff(m)) for m in meshes)
+        assert smallest > 0.1 * (1.0 - math.cos(math.pi / n)) * 0.5 * spec.duration
