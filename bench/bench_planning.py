@@ -58,6 +58,7 @@ def measure(name: str, reach: float) -> dict:
         "reach_before": c0["reach"], "reach_after": c1["reach"],
         "jump_before": c0["cusp_jump"], "jump_after": c1["cusp_jump"],
         "force_before": i0["peak_force_on_mass"], "force_after": i1["peak_force_on_mass"],
+        "accel_after": c1["mass_acceleration"],
         "cusp_mass_speed": i1["max_cusp_mass_speed"], "cusp_impulse": i1["max_cusp_impulse"],
         "effort_before": i0["effort"], "effort_after": i1["effort"],
         "duration_before": sum(s.duration for s in before.trace.sections if s.phases),
@@ -69,20 +70,30 @@ def measure(name: str, reach: float) -> dict:
     }
 
 
+def _verified(r: dict) -> str:
+    """The replay's verdict in a few words: yes, or no and why."""
+    if r["verified"]:
+        return "yes"
+    if r["deviation"] > r["tolerance"]:
+        return f"no: the replay strays {r['deviation'] / r['tolerance']:.2g} x its tolerance"
+    return f"no: {r['message'][:60]}"
+
+
 def markdown(rows: list[dict]) -> str:
     """The table of the README and the guide."""
-    head = ("| figure | reach before → after (m) | cusp jump before → after (m) | peak force (N) | cusp mass speed (m/s) "
+    head = ("| figure | reach before → after (m) | cusp jump before → after (m) | peak force (N) | peak accel (m/s²) "
+            "| cusp mass speed (m/s) "
             "| cusp impulse (N s) | duration (s) | residual | verified | plan time (× flower) |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for r in rows:
         if not r["duration_after"] > 0:  # nothing planned: no motion to measure
-            lines.append(f"| {r['figure']} | {r['reach_before']:.3g} → – | {r['jump_before']:.3g} → – | – | – | – | – | – "
+            lines.append(f"| {r['figure']} | {r['reach_before']:.3g} → – | {r['jump_before']:.3g} → – | – | – | – | – | – | – "
                          f"| no: {r['message'][:60]} | {r['ratio']:.0f} |")
             continue
         lines.append(
             f"| {r['figure']} | {r['reach_before']:.3g} → {r['reach_after']:.3g} | {r['jump_before']:.3g} → "
-            f"{r['jump_after']:.1g} | {r['force_after']:.3g} | {r['cusp_mass_speed']:.3g} | {r['cusp_impulse']:.3g} | "
-            f"{r['duration_after']:.1f} | {r['residual']:.0e} | {'yes' if r['verified'] else 'no'} | "
+            f"{r['jump_after']:.1g} | {r['force_after']:.3g} | {r['accel_after']:.3g} | {r['cusp_mass_speed']:.3g} | "
+            f"{r['cusp_impulse']:.3g} | {r['duration_after']:.1f} | {r['residual']:.0e} | {_verified(r)} | "
             f"{r['ratio']:.0f} |")
     return "\n".join(lines)
 
