@@ -200,3 +200,21 @@ def test_the_mesh_of_a_symmetric_section_has_no_interval_of_round_off():
         assert all(a[-1] == b[0] for a, b in zip(meshes[:-1], meshes[1:]))
         smallest = min(np.min(np.diff(m)) for m in meshes)
         assert smallest > 0.1 * (1.0 - math.cos(math.pi / n)) * 0.5 * spec.duration
+
+
+def test_a_plan_restarted_from_itself_is_found_again_at_once():
+    # The guess's states at the collocation points are interpolated between its nodes: a start
+    # whose collocation defects are small. (Copies of the next node took twice the iterations on
+    # this arc, and the school three's linked program 140 against 27.)
+    from skatetrace.planning.collocation import solve_program
+    from skatetrace.planning.planner import _program_options, curve_specs
+
+    fig = figure_from_dict({"schema": "skatetrace.figure/1",
+                            "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 198}]}]})
+    popts = _program_options(st.PAPER_PARAMS, st.TraceOptions(reach=1.0))
+    specs, _ = curve_specs(fig.curves[0])
+    first = solve_program(specs, popts)
+    again = solve_program(specs, popts, guess=first, meshes=first.meshes)
+    assert first.success and again.success
+    assert again.iterations <= first.iterations // 2
+    assert again.objective == pytest.approx(first.objective, rel=1e-6)
