@@ -17,6 +17,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 from scipy.optimize import root
 
 from ..dynamics.integrator import integrate_legs
@@ -169,7 +170,7 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
 
     def unpack(z):
         uu = np.concatenate([[u0], z[1:N + 1]])
-        ys = [y0] + [z[N + 1 + 5 * i:N + 6 + 5 * i] * yscale for i in range(K - 1)]
+        ys = [y0] + list(z[N + 1:].reshape(K - 1, 5) * yscale)
         return z[0], uu, ys
 
     def segment(k, z, dense=False):
@@ -220,9 +221,15 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
     with np.errstate(all="ignore"):
         r, cache = residual(z)
         ok = r is not None
+        previous = math.inf
         for _ in range(max_iter if ok else 0):
-            if np.max(np.abs(r)) <= 0.1 * residual_tol:
+            # a tenth of the tolerance to spare; but once within it, an iteration that did not
+            # halve the residual is at the round-off floor, and more of them (a Jacobian of
+            # hundreds of integrations each) only wander there (circle eight: eight more at 2e-11)
+            worst = np.max(np.abs(r))
+            if worst <= 0.1 * residual_tol or (worst <= residual_tol and worst > 0.5 * previous):
                 break
+            previous = worst
             J = np.empty((r.size, z.size))
             for i in range(z.size):
                 h = 1e-7 * max(1.0, abs(z[i]))
@@ -236,7 +243,9 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
                 J[:, i] = (rp - r) / h
             if not ok:
                 break
-            dz = np.linalg.lstsq(J, -r, rcond=None)[0]
+            # least-norm step by a complete orthogonal factorisation (LAPACK gelsy): the same
+            # step as numpy's SVD-based lstsq, in a third of the time on these shapes
+            dz = scipy.linalg.lstsq(J, -r, lapack_driver="gelsy", check_finite=False)[0]
             step = 1.0
             while step > 1e-3:
                 rn, cn = residual(z + step * dz)
