@@ -253,3 +253,19 @@ def test_effort_integrates_the_squared_force_between_jumps():
     cut = np.flatnonzero(np.diff(t) <= 0.0) + 1
     # (2 * 3)^2 over one second, (2 * 0.5)^2 over two: the jump itself adds nothing
     assert _effort(2.0, t, acc, cut) == pytest.approx(36.0 + 2.0, rel=1e-12)
+
+
+def test_rows_apart_by_round_off_are_a_jump_not_an_acceleration():
+    # The mass circles at radius 0.3 (acceleration 0.3); at t = 1 its rates jump (a piece's end),
+    # sampled on both sides at times 4e-13 apart instead of at one time. The difference quotient
+    # across them would read 1e12; the jump is measured as one, the acceleration stays 0.3.
+    t = np.concatenate([np.linspace(0.0, 1.0, 401), 1.0 + 4e-13 + np.linspace(0.0, 1.0, 401)])
+    w = np.where(t <= 1.0, 1.0, -1.0)  # the sense of rotation reverses at the jump
+    a, b = 0.3 * np.cos(w * t), 0.3 * np.sin(w * t)
+    adot, bdot = -0.3 * w * np.sin(w * t), 0.3 * w * np.cos(w * t)
+    z = np.zeros_like(t)
+    trace, schedule, states = _fake(t, a, b, adot, bdot, z, z, z, z, z, z.astype(int))
+    f = assess_feasibility(trace, schedule, states, _limits())
+    assert {c.name: c for c in f.checks}["mass_acceleration"].value == pytest.approx(0.3, rel=1e-4)
+    # the velocity jumps from (-0.3 sin 1, 0.3 cos 1) to (-0.3 sin 1, -0.3 cos 1)
+    assert f.info["max_mass_velocity_jump_at_join"] == pytest.approx(0.6 * math.cos(1.0), rel=1e-9)

@@ -388,9 +388,13 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
     add("mass_speed", "mass moves at {value} relative to the body", np.hypot(adot, bdot), limits.mass_speed, V)
 
     # Acceleration on the ice, by finite differences within each stretch between jumps (a repeated
-    # time marks a jump of the rates at a smooth join, or of everything at a cusp).
+    # time marks a jump of the rates at a smooth join, or of everything at a cusp). Two rows
+    # closer than the times' round-off are such a jump too, sampled from both sides at times
+    # apart by 4e-13 (the paragraph bracket's plan, at a piece's end: a difference quotient read
+    # 1.8e13 m/s^2 there), and so is a change of section.
     acc = np.zeros(n)
-    cut = np.flatnonzero(np.diff(t) <= 0.0) + 1
+    tiny = 1e-12 * max(1.0, float(np.max(np.abs(t)))) if n else 0.0
+    cut = np.flatnonzero((np.diff(t) <= tiny) | (np.diff(sec) != 0)) + 1
     for i0, i1 in zip(np.concatenate([[0], cut]), np.concatenate([cut, [n]])):
         if i1 - i0 >= 3:
             tt = t[i0:i1]
