@@ -50,7 +50,7 @@ def _add_planner_args(t) -> None:
     g.add_argument("--reach", default="none",
                    help="keep the moving mass within this distance of the blade's contact point, e.g. 0.5m (or 0.5 "
                         "in the figure's units), and plan its motion (CasADi/IPOPT, then finished exactly; "
-                        "6 to 90 s for a school figure); 'auto' for figures in metres: "
+                        "5 to 60 s for a school figure); 'auto' for figures in metres: "
                         f"{REACH_PER_HEIGHT:g} x --height, the trunk's length; default none: the launch-glide-stop "
                         "manoeuvres")
     g.add_argument("--objective", choices=("effort", "time"), default="effort",
