@@ -105,3 +105,13 @@ def test_a_span_of_a_few_ulps_is_not_split_forever():
     assert len(spans) == 3
     assert np.all((spans[1] >= lo) & (spans[1] <= hi)) and spans[1].size <= 16  # left as first sampled
     assert len(calls) < 100
+
+
+def test_steps_within_round_off_are_not_distinct():
+    from skatetrace.dynamics.controls import distinct_steps
+
+    t = np.array([0.0, 1.0, 1.0, 1.0 + 4e-13, 2.0, 3.0])
+    np.testing.assert_array_equal(distinct_steps(t), [True, False, False, True, True])
+    assert distinct_steps([5.0]).size == 0 and distinct_steps([]).size == 0
+    # the round-off scales with the times: 1e-9 apart is one time at t = 1e4, two at t = 1
+    assert not distinct_steps([1e4, 1e4 + 1e-9])[0] and distinct_steps([1.0, 1.0 + 1e-9])[0]

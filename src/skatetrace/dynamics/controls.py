@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ControlSchedule", "sample_adaptively", "sample_intervals"]
+__all__ = ["ControlSchedule", "distinct_steps", "sample_adaptively", "sample_intervals"]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -97,6 +97,18 @@ class ControlSchedule:
                     (3 * a3 * h + 2 * a2) * h + a1, (3 * b3 * h + 2 * b2) * h + b1)
 
         return f
+
+
+def distinct_steps(t) -> np.ndarray:
+    """Per step ``t[i] -> t[i + 1]`` of sampled times, whether the two differ by more than their round-off.
+
+    Rows at one time up to round-off (``1e-12`` of the largest time, at least ``1e-12``) stand for
+    the two sides of a jump: a finite difference across them measures the jump, not a rate.
+    """
+    t = np.asarray(t, dtype=float)
+    if t.size < 2:
+        return np.zeros(0, dtype=bool)
+    return np.diff(t) > 1e-12 * max(1.0, float(np.max(np.abs(t))))
 
 
 def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-11, rate_tol: float = 1e-9,

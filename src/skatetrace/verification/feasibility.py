@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from ..dynamics.controls import ControlSchedule
+from ..dynamics.controls import ControlSchedule, distinct_steps
 from ..dynamics.model import SleighParams, mass_energy, mass_velocity
 from ..dynamics.presets import IMPULSE_TIME
 
@@ -393,8 +393,7 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
     # apart by 4e-13 (the paragraph bracket's plan, at a piece's end: a difference quotient read
     # 1.8e13 m/s^2 there), and so is a change of section.
     acc = np.zeros(n)
-    tiny = 1e-12 * max(1.0, float(np.max(np.abs(t)))) if n else 0.0
-    cut = np.flatnonzero((np.diff(t) <= tiny) | (np.diff(sec) != 0)) + 1
+    cut = np.flatnonzero(~distinct_steps(t) | (np.diff(sec) != 0)) + 1
     for i0, i1 in zip(np.concatenate([[0], cut]), np.concatenate([cut, [n]])):
         if i1 - i0 >= 3:
             tt = t[i0:i1]

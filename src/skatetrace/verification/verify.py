@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from ..dynamics.controls import ControlSchedule, sample_intervals
+from ..dynamics.controls import ControlSchedule, distinct_steps, sample_intervals
 from ..dynamics.model import SleighParams, momenta, velocities
 from ..dynamics.replayer import replay_chunk
 from ..dynamics.simulate import simulate
@@ -317,7 +317,7 @@ def _figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params:
     best = np.hypot(x[idx] - points[0], y[idx] - points[1])
     if t.size < 2:
         return best
-    proper = np.diff(t) > 1e-12 * max(1.0, float(np.max(np.abs(t))))  # interval i = samples (i, i + 1)
+    proper = distinct_steps(t)  # interval i = samples (i, i + 1)
     ids = np.arange(proper.size)
     # last proper interval ending at or before sample j, first one starting at or after it (-1 / size: none)
     prev_end = np.maximum.accumulate(np.where(proper, ids, -1))  # index <= i
