@@ -165,21 +165,20 @@ def _warm_start(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, i
     sols, pinned = [], []
     closing = 0.0 if popts.closing_turn is None else popts.closing_turn
     for k, (spec, (start, end)) in enumerate(zip(specs, _cusp_pins(specs, popts.reach, closing))):
-        sol = solve(spec, start, end)
-        ends = (start is not None, end is not None)
+        sol, on_pins = solve(spec, start, end), True
         if not sol.success:
             # IPOPT may not find the pinned plan from the launch-glide-stop guess (paragraph three's
             # second circle, 500 iterations) but from the plan with free ends (9 s); else the free plan
-            sol, ends = solve(spec, None, None), (False, False)
+            sol, on_pins = solve(spec, None, None), False
             if sol.success:
                 again = solve(spec, start, end, guess=sol)
                 if again.success:
-                    sol, ends = again, (True, True)
+                    sol, on_pins = again, True
         if not sol.success:
             return None, k, ()
         sols.append(sol)
-        pinned.append(ends)
-    continues = tuple(k > 0 and pinned[k - 1][1] and pinned[k][0] for k in range(len(specs)))
+        pinned.append(on_pins)
+    continues = tuple(k > 0 and pinned[k - 1] and pinned[k] for k in range(len(specs)))
     return _chain(sols, "warm start"), None, continues
 
 
@@ -389,7 +388,7 @@ _STRIDES = (2, 1)
 
 
 def _finish_curve(plan, links, specs, sections, ci, params, options, fn) -> list[SectionTrace]:
-    """Each section of a planned curve finished exactly from the exact end of the one before.
+    """Each section of a planned curve (``plan``: a successful one) finished exactly from the exact end of the one before.
 
     ``links[k]`` says how section ``k`` meets the one before: ``"start"`` (a curve's first
     section), ``"continuous"`` (the mass's position and velocity carried on), ``"impulse"`` (its
@@ -400,11 +399,6 @@ def _finish_curve(plan, links, specs, sections, ci, params, options, fn) -> list
     for k, (spec, sec) in enumerate(zip(specs, sections)):
         if arrived is not None:
             arrived = arrived.turned(spec.turn)
-        if not plan.success:
-            out.append(_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED,
-                               f"reach {options.reach:.4g}: IPOPT found no plan of the whole curve ({plan.message}), "
-                               "although each section has one on its own"))
-            continue
         X, times = plan.states[k], plan.times[k]
         r0, r1 = _rates(fn, X, spec, False), _rates(fn, X, spec, True)
         planned = RestState(float(X[2, 0]), float(X[3, 0]), float(r0[0]), float(r0[1]))
