@@ -97,6 +97,10 @@ def test_a_planned_cusp_is_exact_verified_and_keeps_the_mass_in_place(through_a_
     assert checks["reach"].value <= 1.0
     info = result.feasibility.info
     assert info["max_cusp_impulse"] == pytest.approx(second.metrics["link_impulse"], rel=1e-6, abs=1e-9)
+    # the one cusp's impulse as the effort of delivering it within IMPULSE_TIME, rows against plan
+    from skatetrace.dynamics.presets import IMPULSE_TIME
+
+    assert info["cusp_effort"] == pytest.approx(second.metrics["link_impulse"] ** 2 / IMPULSE_TIME, rel=1e-5, abs=1e-9)
     assert info["max_cusp_mass_speed"] > 0.0
 
 
