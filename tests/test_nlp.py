@@ -1,4 +1,4 @@
-"""The sparse program of the planner: its assembled Hessian is CasADi's own, and a failed solve is data."""
+"""The sparse program of the planner: its assembled derivatives are CasADi's own, and a failed solve is data."""
 
 import casadi as ca
 import numpy as np
@@ -26,8 +26,7 @@ def _program(N: int = 5) -> SparseProgram:
 
 def test_the_assembled_hessian_is_the_lagrangians():
     prog = _program()
-    g = ca.vertcat(*prog._g)
-    f = prog._f_blocks + prog._f_rest
+    f, g = prog.expanded()
     sigma, lam = ca.SX.sym("sigma"), ca.SX.sym("lam", g.numel())
     auto = ca.Function("auto", [prog.x, sigma, lam], [ca.triu(ca.hessian(sigma * f + ca.dot(lam, g), prog.x)[0])])
     mine = prog._hessian()
@@ -39,6 +38,40 @@ def test_the_assembled_hessian_is_the_lagrangians():
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
 
 
+def test_the_program_evaluates_its_blocks_and_rows_in_order():
+    # the oracle IPOPT evaluates, against the blocks evaluated one by one in numpy
+    N = 5
+    prog = _program(N)
+    f, g = prog.expanded()
+    x = np.random.default_rng(4).normal(size=prog.n)
+    fx, gx = (np.array(v).ravel() for v in ca.Function("o", [prog.x], [f, g])(x))
+    p = np.random.default_rng(0).random((2, N))  # the parameters _program drew
+    s = np.linspace(0.1, 0.5, N)
+    z0, z1, z2 = x[0:2 * N:2], x[1:2 * N:2], s * x[2 * N]
+    rows = np.concatenate([np.ravel([z0 ** 2 * z1 - p[0], np.sin(z2) * z0], order="F"), z1 ** 3 * 1.5,
+                           [x[-3] ** 2 * x[0] + x[-1] ** 3, x[1] - x[2]]])
+    np.testing.assert_allclose(gx, rows, rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(fx, np.sum(z0 ** 4 + z1 * z2 * 2.0) + x[-2] ** 2 * x[3], rtol=1e-14)
+
+
+def test_the_assembled_jacobian_and_gradient_are_casadis():
+    prog = _program()
+    f, g = prog.expanded()
+    auto = ca.Function("auto", [prog.x], [g, ca.jacobian(g, prog.x), f, ca.gradient(f, prog.x)])
+    jac, grad = prog._jacobian(), prog._gradient()
+    assert jac.sparsity_out(1).nnz() == ca.jacobian(g, prog.x).nnz()  # no structural zeros added, none lost
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        x = rng.normal(size=prog.n)
+        g_want, J_want, f_want, grad_want = (np.array(v) for v in auto(x))
+        g_got, J_got = (np.array(v) for v in jac(x, []))
+        f_got, grad_got = (np.array(v) for v in grad(x, []))
+        np.testing.assert_allclose(g_got, g_want, rtol=1e-13, atol=1e-13 * np.abs(g_want).max())
+        np.testing.assert_allclose(J_got, J_want, rtol=1e-13, atol=1e-13 * np.abs(J_want).max())
+        np.testing.assert_allclose(f_got, f_want, rtol=1e-13)
+        np.testing.assert_allclose(grad_got, grad_want, rtol=1e-13, atol=1e-13 * np.abs(grad_want).max())
+
+
 def test_a_solve_that_fails_comes_back_as_data():
     prog = SparseProgram(1)
     prog.constrain(prog.x[0] ** 2, -2.0, -1.0)  # no real x has a negative square
@@ -48,9 +81,27 @@ def test_a_solve_that_fails_comes_back_as_data():
     assert res.status in ("Infeasible_Problem_Detected", "Maximum_Iterations_Exceeded", "Restoration_Failed")
 
 
-def test_a_solve_finds_the_minimum():
-    prog = _program()
-    prog.x0[:] = 0.5
-    res = prog.solve({"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"})
+def test_a_solve_finds_the_minimum_that_casadis_own_derivatives_find():
+    # a program with one minimum: blocks pulled towards their parameters, held on a line and
+    # inside a disc, a shared unknown scaled differently in each, and a term outside the blocks
+    N = 6
+    prog = SparseProgram(2 * N + 2)
+    z, p, q = ca.SX.sym("z", 3), ca.SX.sym("p", 2), ca.SX.sym("q")
+    fn = ca.Function("f", [z, p, q], [(z[0] - p[0]) ** 2 + (z[1] - p[1]) ** 2 + z[2] ** 2, z[0] + z[1] * z[2] - q,
+                                      z[0] ** 2 + z[1] ** 2])
+    index = np.vstack([np.arange(0, 2 * N, 2), np.arange(1, 2 * N, 2), np.full(N, 2 * N)])
+    scale = np.vstack([np.ones(N), np.ones(N), np.linspace(0.5, 1.5, N)])
+    rng = np.random.default_rng(3)
+    prog.mapped(fn, index, scale, (ca.DM(rng.random((2, N))), ca.DM(0.5)), ("cost", (0, 0), (-np.inf, 0.5)))
+    prog.constrain(prog.x[-1] ** 2 + prog.x[0], 1.0)
+    prog.minimize((prog.x[-1] - 2.0) ** 2)
+    prog.x0[:] = 0.1
+    options = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-10}
+    res = prog.solve(options)
     assert res.success, res.status
-    assert res.x.shape == (prog.n,) and np.isfinite(res.objective)
+    f, g = prog.expanded()
+    own = ca.nlpsol("own", "ipopt", {"x": prog.x, "f": f, "g": g}, options)
+    sol = own(x0=prog.x0, lbg=np.concatenate(prog._lbg), ubg=np.concatenate(prog._ubg))
+    assert own.stats()["success"]
+    np.testing.assert_allclose(res.objective, float(sol["f"]), rtol=1e-8)
+    np.testing.assert_allclose(res.x, np.array(sol["x"]).ravel(), atol=1e-6)

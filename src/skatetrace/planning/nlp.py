@@ -1,12 +1,15 @@
-"""A sparse nonlinear program whose Hessian is assembled from the small Hessians of its repeated blocks.
+"""A sparse nonlinear program whose derivatives are assembled from the small derivatives of its repeated blocks.
 
 A collocation program repeats one small function (a collocation interval) hundreds of times.
-CasADi derives the Hessian of the Lagrangian of the whole expanded program symbolically, and
-that derivation, repeated for every program the planner solves, cost more than IPOPT's
-iterations (1.2 s of 2 s for one section, 4 s of 8 s for a curve of four). Here the Hessian of
-one block is derived once, evaluated for every interval by a CasADi map, and scattered into the
-program's Hessian by a constant sparse matrix; only the few other terms (boundary conditions,
-links between sections) are differentiated as a whole. IPOPT receives it as ``hess_lag``.
+CasADi derives the derivatives of the whole expanded program symbolically, and that
+derivation, repeated for every program the planner solves, cost more than IPOPT's iterations:
+the Hessian of the Lagrangian 1.2 s of 2 s for one section, 4 s of 8 s for a curve of four;
+once the Hessian was assembled, the constraints' Jacobian and the objective's gradient still
+1.3 s of the 2 s that building the school rocker's linked program took. Here the derivatives of
+one block are derived once, evaluated for every interval by a CasADi map, and placed in the
+program's (by a constant sparse matrix where blocks share an unknown); only the few other terms
+(boundary conditions, links between sections) are differentiated as a whole. IPOPT receives
+them as ``hess_lag``, ``jac_g`` and ``grad_f``.
 
 Unknowns are one vector :attr:`SparseProgram.x`; a block's local unknowns are entries of it,
 each times a constant (a collocation interval's length is a piece's duration times a fraction).
@@ -37,19 +40,42 @@ class ProgramResult:
 
 
 @dataclass(frozen=True, slots=True)
-class _Blocks:
-    """One mapped block: the Hessian of its local Lagrangian and where its unknowns and rows sit."""
+class _Local:
+    """The derivatives of one block function in its local unknowns, each a function of its nonzeros, and their patterns.
 
+    ``jacobian``: of the constrained outputs stacked (pattern: rows of the stack, local unknowns);
+    ``gradient``: of the summed cost outputs (pattern: local unknowns); ``hessian``: of the
+    Lagrangian ``sigma * cost + lam . constrained`` (pattern: local unknowns, both ways).
+    """
+
+    jacobian: ca.Function
+    jac_pattern: tuple[np.ndarray, np.ndarray]
+    gradient: ca.Function
+    grad_pattern: np.ndarray
     hessian: ca.Function
-    pattern: tuple  # (rows, columns) of the local Hessian's nonzeros, in the order of its output
+    pattern: tuple[np.ndarray, np.ndarray]
+
+
+@dataclass(frozen=True, slots=True)
+class _Blocks:
+    """One mapped block: its local derivatives and where its unknowns and rows sit."""
+
+    local: _Local
+    fn: ca.Function
     index: np.ndarray  # (nz, N) entries of x
     scale: np.ndarray  # (nz, N)
     params: tuple
     rows: tuple  # per constrained output: (rows_out, N) constraint rows, or None for the cost output
 
+    @property
+    def stacked_rows(self) -> np.ndarray:
+        """``(sum rows_out, N)``: the constraint row of each row of the constrained outputs stacked."""
+        rows = [r for r in self.rows if r is not None]
+        return np.vstack(rows) if rows else np.zeros((0, self.index.shape[1]), dtype=np.int64)
+
 
 class SparseProgram:
-    """Unknowns, constraints and objective of one program, with IPOPT and an assembled Hessian.
+    """Unknowns, constraints and objective of one program, with IPOPT and assembled derivatives.
 
     Parameters
     ----------
@@ -64,72 +90,165 @@ class SparseProgram:
         self.x0 = np.zeros(self.n)
         self.lbx = np.full(self.n, -np.inf)
         self.ubx = np.full(self.n, np.inf)
-        self._g: list = []
         self._lbg: list[np.ndarray] = []
         self._ubg: list[np.ndarray] = []
         self._ng = 0
-        self._f_blocks = 0
         self._f_rest = 0
-        self._g_rest: list = []
+        self._g_rest: list = []  # the nonlinear rows outside the blocks (for the Hessian)
         self._rest_rows: list[np.ndarray] = []
+        self._g_other: list = []  # every row outside the blocks
+        self._other_rows: list[np.ndarray] = []
         self._blocks: list[_Blocks] = []
+        self._derived: dict = {}  # id(fn), output kinds -> (fn, _Local): one derivation per block function
 
     def view(self, start: int, rows: int, cols: int = 1) -> ca.SX:
         """The unknowns ``x[start:start + rows * cols]`` as a ``rows x cols`` matrix (column-major)."""
         return ca.reshape(self.x[start:start + rows * cols], rows, cols)
 
-    def _add_rows(self, expr, lb, ub) -> np.ndarray:
-        expr = ca.vec(expr)
-        k = expr.numel()
-        self._g.append(expr)
+    def _reserve(self, k: int, lb, ub) -> np.ndarray:
+        """The next ``k`` constraint rows, with their bounds."""
         self._lbg.append(np.broadcast_to(np.asarray(lb, dtype=float), (k,)).copy())
         self._ubg.append(np.broadcast_to(np.asarray(ub, dtype=float), (k,)).copy())
         rows = np.arange(self._ng, self._ng + k)
         self._ng += k
         return rows
 
+    def _other(self, expr, lb, ub) -> np.ndarray:
+        expr = ca.vec(expr)
+        rows = self._reserve(expr.numel(), lb, ub)
+        self._g_other.append(expr)
+        self._other_rows.append(rows)
+        return rows
+
     def constrain(self, expr, lb=0.0, ub=None) -> None:
         """``lb <= expr <= ub`` (``ub`` defaults to ``lb``: an equality), ``expr`` any expression of :attr:`x`."""
-        ub = lb if ub is None else ub
-        rows = self._add_rows(expr, lb, ub)
+        rows = self._other(expr, lb, lb if ub is None else ub)
         self._g_rest.append(ca.vec(expr))
         self._rest_rows.append(rows)
 
     def linear(self, expr, lb=0.0, ub=None) -> None:
         """A constraint known to be linear in :attr:`x` (it adds nothing to the Hessian)."""
-        self._add_rows(expr, lb, ub if ub is not None else lb)
+        self._other(expr, lb, lb if ub is None else ub)
 
     def minimize(self, expr) -> None:
         """Add ``expr`` (an expression of :attr:`x`) to the objective."""
         self._f_rest = self._f_rest + expr
 
-    def mapped(self, fn: ca.Function, index: np.ndarray, scale: np.ndarray, params: tuple, kinds: tuple) -> list:
+    def mapped(self, fn: ca.Function, index: np.ndarray, scale: np.ndarray, params: tuple, kinds: tuple) -> None:
         """``fn`` over ``N`` blocks: its first input the local unknowns, the rest ``params``.
 
         ``index`` and ``scale`` (``nz x N``) say that local unknown ``i`` of block ``k`` is
         ``scale[i, k] * x[index[i, k]]``; ``params`` are constants with one column, or ``N``.
         ``kinds`` gives per output of ``fn``: ``"cost"`` (summed into the objective) or
         ``(lb, ub)`` (bounds of every row, scalars or arrays of the output's ``rows x N``).
-        Returns the outputs over all blocks.
+        The blocks are never expanded into one expression: IPOPT evaluates ``fn`` over them
+        (a CasADi map), and their derivatives are derived on one block.
         """
         index = np.asarray(index, dtype=np.int64)
         scale = np.asarray(scale, dtype=float)
-        nz, N = index.shape
-        z = ca.reshape(self.x[index.ravel(order="F").tolist()], nz, N) * ca.DM(scale)
-        outs = fn.map(N)(z, *params)
-        outs = outs if isinstance(outs, (list, tuple)) else [outs]
+        N = index.shape[1]
         rows = []
-        for out, kind in zip(outs, kinds):
+        for i, kind in enumerate(kinds):
             if kind == "cost":
-                self._f_blocks = self._f_blocks + ca.sum2(ca.sum1(out))
                 rows.append(None)
-            else:
-                lb, ub = kind
-                r = self._add_rows(out, np.asarray(lb, dtype=float).ravel(order="F") if np.ndim(lb) else lb,
-                                   np.asarray(ub, dtype=float).ravel(order="F") if np.ndim(ub) else ub)
-                rows.append(r.reshape(out.shape, order="F"))
-        self._blocks.append(_Blocks(*_local_hessian(fn, kinds), index, scale, tuple(params), tuple(rows)))
-        return list(outs)
+                continue
+            lb, ub = kind
+            shape = (fn.size1_out(i) * fn.size2_out(i), N)
+            r = self._reserve(shape[0] * N, np.asarray(lb, dtype=float).ravel(order="F") if np.ndim(lb) else lb,
+                              np.asarray(ub, dtype=float).ravel(order="F") if np.ndim(ub) else ub)
+            rows.append(r.reshape(shape, order="F"))
+        shape = tuple("cost" if kind == "cost" else "rows" for kind in kinds)
+        key = (id(fn), shape)
+        if key not in self._derived:
+            self._derived[key] = (fn, _local_derivatives(fn, shape))
+        self._blocks.append(_Blocks(self._derived[key][1], fn, index, scale, tuple(params), tuple(rows)))
+
+    def _oracle(self, xm):
+        """The objective and the constraints (in row order) on the unknowns ``xm``: the blocks mapped, never expanded."""
+        f = ca.Function("f_rest", [self.x], [self._f_rest])(xm) if not _is_zero(self._f_rest) else 0
+        parts, rows = [], []
+        for blk in self._blocks:
+            outs = self._local_values(blk, xm, blk.fn)
+            outs = outs if isinstance(outs, (list, tuple)) else [outs]
+            for out, r in zip(outs, blk.rows):
+                if r is None:
+                    f = f + ca.sum2(ca.sum1(out))
+                else:
+                    parts.append(ca.vec(out))
+                    rows.append(r.ravel(order="F"))
+        if self._other_rows:
+            parts.append(ca.Function("other", [self.x], [ca.vertcat(*self._g_other)])(xm))
+            rows.append(np.concatenate(self._other_rows))
+        if not parts:
+            return ca.MX(f), ca.MX(0, 1)
+        order = np.argsort(np.concatenate(rows), kind="stable")
+        return ca.MX(f), ca.vertcat(*parts)[order.tolist()]
+
+    def expanded(self) -> tuple[ca.SX, ca.SX]:
+        """The objective and the constraints as expressions of :attr:`x`, the blocks expanded (for checks)."""
+        xm = ca.MX.sym("x", self.n)
+        f, g = self._oracle(xm)
+        expand = ca.Function("oracle", [xm], [f, g]).expand()
+        return tuple(expand(self.x))
+
+    def _local_values(self, blk: _Blocks, xm, fn: ca.Function, *extra):
+        """``fn`` (a local derivative) over every block of ``blk``: the ``(nnz, N)`` values, on the unknowns ``xm``."""
+        nz, N = blk.index.shape
+        z = ca.reshape(xm[blk.index.ravel(order="F").tolist()], nz, N) * ca.DM(blk.scale)
+        return fn.map(N)(z, *blk.params, *extra)
+
+    def _jacobian(self) -> ca.Function:
+        """``jac_g`` for IPOPT: the constraints and their Jacobian, the blocks' placed entry by entry."""
+        xm = ca.MX.sym("x", self.n)
+        values, rows, cols = [], [], []
+        for blk in self._blocks:
+            li, lj = blk.local.jac_pattern
+            if li.size == 0:
+                continue
+            local = self._local_values(blk, xm, blk.local.jacobian)  # (nnz, N)
+            # local entry (i, j) of block k is d row[i, k] / d x[index[j, k]], times the unknown's scale
+            values.append(ca.vec(local) * ca.DM(blk.scale[lj, :].ravel(order="F")))
+            rows.append(blk.stacked_rows[li, :].ravel(order="F"))
+            cols.append(blk.index[lj, :].ravel(order="F"))
+        if self._other_rows:
+            other = ca.vertcat(*self._g_other)
+            J = ca.jacobian(other, self.x)
+            ri, ci = J.sparsity().get_triplet()
+            if ri:
+                values.append(ca.Function("other", [self.x], [ca.vertcat(*J.nonzeros())])(xm))
+                rows.append(np.concatenate(self._other_rows)[np.asarray(ri, dtype=np.int64)])
+                cols.append(np.asarray(ci, dtype=np.int64))
+        g = self._oracle(xm)[1]
+        if not values:
+            return ca.Function("nlp_jac_g", [xm, ca.MX.sym("p", 0)], [g, ca.MX(self._ng, self.n)],
+                               ["x", "p"], ["g", "jac_g_x"])
+        r, c = np.concatenate(rows), np.concatenate(cols)
+        key = c * max(self._ng, 1) + r  # column-major position, CasADi's order of nonzeros
+        order = np.argsort(key, kind="stable")
+        if np.any(np.diff(key[order]) == 0):
+            raise ValueError("two blocks claim the same entry of the Jacobian: a row belongs to one block")
+        sparsity = ca.Sparsity.triplet(self._ng, self.n, r[order].tolist(), c[order].tolist())
+        J = ca.MX(sparsity, ca.vertcat(*values)[order.tolist()])
+        return ca.Function("nlp_jac_g", [xm, ca.MX.sym("p", 0)], [g, J], ["x", "p"], ["g", "jac_g_x"])
+
+    def _gradient(self) -> ca.Function:
+        """``grad_f`` for IPOPT: the objective and its gradient, the blocks' summed where they share an unknown."""
+        xm = ca.MX.sym("x", self.n)
+        grad = ca.MX(self.n, 1)
+        for blk in self._blocks:
+            lj = blk.local.grad_pattern
+            if lj.size == 0:
+                continue
+            N = blk.index.shape[1]
+            local = self._local_values(blk, xm, blk.local.gradient)
+            src = np.arange(lj.size * N)
+            weights = blk.scale[lj, :].ravel(order="F")
+            scatter = sps.csc_matrix((weights, (blk.index[lj, :].ravel(order="F"), src)), shape=(self.n, lj.size * N))
+            grad = grad + ca.mtimes(ca.DM(scatter), ca.vec(local))
+        f = self._oracle(xm)[0]
+        if not _is_zero(self._f_rest):
+            grad = grad + ca.Function("grad_rest", [self.x], [ca.gradient(self._f_rest, self.x)])(xm)
+        return ca.Function("nlp_grad_f", [xm, ca.MX.sym("p", 0)], [f, ca.densify(grad)], ["x", "p"], ["f", "grad_f_x"])
 
     def _hessian(self) -> ca.Function:
         """``hess_lag`` for IPOPT: the upper triangle of the Lagrangian's Hessian."""
@@ -152,11 +271,10 @@ class SparseProgram:
 
     def _assembled(self, blk: _Blocks, xm, lam_f, lam_g):
         """One mapped block's share of the Hessian: its local Hessians scattered into the program's."""
-        nz, N = blk.index.shape
-        z = ca.reshape(xm[blk.index.ravel(order="F").tolist()], nz, N) * ca.DM(blk.scale)
+        N = blk.index.shape[1]
         lams = [ca.reshape(lam_g[r.ravel(order="F").tolist()], r.shape[0], N) for r in blk.rows if r is not None]
-        local = blk.hessian.map(N)(z, *blk.params, lam_f, *lams)  # (nnz_local, N)
-        li, lj = blk.pattern
+        local = self._local_values(blk, xm, blk.local.hessian, lam_f, *lams)  # (nnz_local, N)
+        li, lj = blk.local.pattern
         # local entry (i, j) of block k lands at (index[i, k], index[j, k]), scaled; upper triangle only
         r, c = blk.index[li, :], blk.index[lj, :]
         keep = r <= c
@@ -171,11 +289,14 @@ class SparseProgram:
 
     def solve(self, options: dict) -> ProgramResult:
         """Solve with IPOPT (``options`` are nlpsol options, e.g. ``ipopt.tol``). Never raises for a failed solve."""
-        g = ca.vertcat(*self._g) if self._g else ca.SX(0, 1)
-        nlp = {"x": self.x, "f": self._f_blocks + self._f_rest, "g": g}
+        xm = ca.MX.sym("x", self.n)
+        f, g = self._oracle(xm)
+        nlp = {"x": xm, "f": f, "g": g}
         opts = dict(options)
         opts.setdefault("error_on_fail", False)
         opts["hess_lag"] = self._hessian()
+        opts["jac_g"] = self._jacobian()
+        opts["grad_f"] = self._gradient()
         solver = ca.nlpsol("plan", "ipopt", nlp, opts)
         lbg = np.concatenate(self._lbg) if self._lbg else np.zeros(0)
         ubg = np.concatenate(self._ubg) if self._ubg else np.zeros(0)
@@ -186,25 +307,34 @@ class SparseProgram:
                              iterations=int(stats.get("iter_count", 0)), stats=stats)
 
 
-def _local_hessian(fn: ca.Function, kinds: tuple) -> tuple[ca.Function, tuple[np.ndarray, np.ndarray]]:
-    """The Hessian of one block's Lagrangian in its local unknowns (the column of its nonzeros), and their pattern."""
+def _local_derivatives(fn: ca.Function, shape: tuple) -> _Local:
+    """The Jacobian, gradient and Hessian of one block in its local unknowns (``shape``: "cost" or "rows" per output)."""
     z = ca.SX.sym("z", fn.size1_in(0))
     params = [ca.SX.sym(f"p{i}", fn.sparsity_in(i + 1)) for i in range(fn.n_in() - 1)]
     outs = fn(z, *params)
     outs = outs if isinstance(outs, (list, tuple)) else [outs]
     sigma = ca.SX.sym("sigma")
-    lams, lag = [], 0
-    for out, kind in zip(outs, kinds):
+    lams, rows, cost = [], [], 0
+    for out, kind in zip(outs, shape):
         if kind == "cost":
-            lag = lag + sigma * ca.sum1(ca.vec(out))
+            cost = cost + ca.sum1(ca.vec(out))
         else:
-            lam = ca.SX.sym("lam", out.numel())
-            lams.append(lam)
-            lag = lag + ca.dot(lam, ca.vec(out))
-    H = ca.hessian(lag, z)[0]
-    li, lj = H.sparsity().get_triplet()
-    fh = ca.Function("block_hessian", [z, *params, sigma, *lams], [ca.vertcat(*H.nonzeros()) if H.nnz() else ca.SX(0, 1)])
-    return fh, (np.asarray(li, dtype=np.int64), np.asarray(lj, dtype=np.int64))
+            lams.append(ca.SX.sym("lam", out.numel()))
+            rows.append(ca.vec(out))
+    stacked = ca.vertcat(*rows) if rows else ca.SX(0, 1)
+    J = ca.jacobian(stacked, z)
+    grad = ca.gradient(cost, z) if not _is_zero(cost) else ca.SX(z.numel(), 1)
+    H = ca.hessian(sigma * cost + (ca.dot(ca.vertcat(*lams), stacked) if lams else 0), z)[0]
+
+    def nonzeros(name, expr, args):
+        triplet = expr.sparsity().get_triplet()
+        out = ca.vertcat(*expr.nonzeros()) if expr.nnz() else ca.SX(0, 1)
+        return ca.Function(name, args, [out]), tuple(np.asarray(t, dtype=np.int64) for t in triplet)
+
+    fj, jac_pattern = nonzeros("block_jacobian", J, [z, *params])
+    fg, (grad_rows, _cols) = nonzeros("block_gradient", grad, [z, *params])
+    fh, pattern = nonzeros("block_hessian", H, [z, *params, sigma, *lams])
+    return _Local(fj, jac_pattern, fg, grad_rows, fh, pattern)
 
 
 def _is_zero(expr) -> bool:
