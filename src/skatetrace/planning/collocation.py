@@ -389,7 +389,8 @@ def _interval_function(fn, C, B, o) -> ca.Function:
     Inputs ``(z, coefficients, s0)`` with ``z = (x_k, x_c (6 * degree), w, h)``; outputs the
     collocation defects, the interval's share of the objective and the path quantities at the
     collocation points (rows: speed ``xi2``, ``a^2 + b^2``, then as asked the squared distance
-    from the singular point, the squared acceleration and the squared rates). One function
+    from the singular point, the squared acceleration (at the interval's start too) and the
+    squared rates). One function
     mapped over the mesh keeps CasADi's setup small, and its Hessian is derived once
     (:mod:`skatetrace.planning.nlp`).
     """
@@ -401,18 +402,27 @@ def _interval_function(fn, C, B, o) -> ca.Function:
     s0 = ca.SX.sym("s0")
     xs = [xk] + [xc[6 * r:6 * r + 6] for r in range(_DEGREE)]
     defects, quad = [], 0
-    speed, reach, sing, acc, rate = [], [], [], [], []
+    speed, reach, sing, rate = [], [], [], []
     # The mass's acceleration from the collocation polynomial of its velocity (differentiated like
     # the states'), not from the chain rule through the dynamics: a far smaller expression for
     # IPOPT's Hessian, and the same to the mesh's accuracy (the mesh is refined against it).
     vels = [fn["velocity"](x, w, cf, s0) for x in xs]
+
+    def accel(r):
+        v_r, xi1_r = vels[r]
+        vdot = sum(C[q, r] * vels[q][0] for q in range(_DEGREE + 1)) / h
+        return ca.vertcat(vdot[0] - xi1_r * v_r[1], vdot[1] + xi1_r * v_r[0])
+
+    # The acceleration jumps at a node (there w changes): its limit from the right, at the
+    # interval's start, is bounded too. Bounded only at the collocation points (the limit from
+    # the left at the end), the exact motion of a least-time arc under max_accel 20 peaked at
+    # 21.2 at a node, where the bound never looked.
+    acc = [ca.sumsqr(accel(0))]
     for r in range(1, _DEGREE + 1):
         xr = xs[r]
         xp = sum(C[q, r] * xs[q] for q in range(_DEGREE + 1))
         defects.append(h * f(xr, w, cf, s0) - xp)
-        v_r, xi1_r = vels[r]
-        vdot = sum(C[q, r] * vels[q][0] for q in range(_DEGREE + 1)) / h
-        A = ca.vertcat(vdot[0] - xi1_r * v_r[1], vdot[1] + xi1_r * v_r[0])
+        A = accel(r)
         if o.objective == "effort":
             quad += B[r] * h * (o.m * o.m) * ca.sumsqr(A)
         quad += 1e-6 * B[r] * h * w**2
