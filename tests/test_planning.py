@@ -122,6 +122,13 @@ def test_the_planned_effort_is_below_the_launch_glide_stop_one(name):
     assert reach > 2.0
 
 
+def test_the_launch_glide_stop_tracer_refuses_a_reach_instead_of_ignoring_it():
+    fig = st.school_figure("three", height=1.7)
+    with pytest.raises(ValueError, match="plan_figure"):
+        st.trace_figure(fig, options=st.TraceOptions(reach=0.5))
+    assert st.plan_figure is plan_figure  # the function the message names
+
+
 def test_the_default_reach_is_the_trunk_length():
     from skatetrace.dynamics.presets import REACH_PER_HEIGHT, skater_reach
 

@@ -33,6 +33,7 @@ _EXPORTS = {
     "figures.patterns": ("pattern", "pattern_names"),
     "dynamics.presets": ("PAPER_PARAMS", "skater_params"),
     "pipeline": ("VerifiedTrace", "add_rests", "trace_and_verify"),
+    "planning.planner": ("plan_figure",),
     "figures.school": ("school_figure", "school_names"),
     "drawings.sources": ("Resolved", "resolve"),
     "tracing.sections": ("FigureTrace", "SectionTrace", "TraceOptions", "TraceStatus", "trace_figure", "trace_section"),

@@ -671,7 +671,18 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
         Called as ``progress(done, total)`` after each section.
     cache : dict, optional
         Solved sections by shape; pass the same dict to several calls to reuse them.
+
+    Raises
+    ------
+    ValueError
+        If ``options.reach`` is set: that asks for a plan within the reach, which
+        :func:`skatetrace.plan_figure` (or :func:`skatetrace.trace_and_verify`) makes; the
+        launch-glide-stop manoeuvres traced here do not keep the mass within any reach.
     """
+    if options.reach is not None:
+        raise ValueError(f"trace_figure traces launch-glide-stop manoeuvres, which keep the mass within no reach; "
+                         f"options.reach={options.reach!r} asks for a plan: use skatetrace.plan_figure or "
+                         f"skatetrace.trace_and_verify, or reach=None")
     params = params or figure.params or SleighParams()
     cache = {} if cache is None else cache
     traces, starts, t = [], [], 0.0
