@@ -38,15 +38,6 @@ MAX_REPLAY_SAMPLES = 2_000_000
 MAX_FIGURE_SAMPLES = 2_000_000
 
 
-#: A planned section is replayed with this fraction of the replay's tolerances. Its mass carries
-#: the angular momentum through every rest (at about 2.9 times the glide speed), where the
-#: replay's momenta must cancel its rates to 1e-8 of that speed, and the sleigh amplifies the
-#: integration's error along the section: at rtol 1e-13 the school rocker's first rest replayed
-#: at 1.6e-8 (3.5e-9 relative, against the verdict's 1e-8) and 5.6e-8 in another plan; at 1e-14,
-#: 2.4e-9 in the first, at twice the replay's time (0.08 s against 0.04 s).
-PLANNED_TOLERANCE = 0.1
-
-
 _SAMPLED = ("a", "b", "adot", "bdot", "p1", "p2", "s", "xi1", "xi2", "segment")
 
 
@@ -131,7 +122,7 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
     Parameters
     ----------
     rtol, atol : float
-        DOP853's tolerances; a planned section's (:data:`PLANNED_TOLERANCE`) a tenth of them.
+        DOP853's tolerances.
     points_per_unit : float
         Density of the returned samples per unit of time (at least 50 per chunk).
     engine : {"compiled", "scipy"}
@@ -171,15 +162,12 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
 
         n = max(50, int(math.ceil((t1 - t0) * points_per_unit)))
         tt = np.linspace(t0, t1, n)
-        tighter = PLANNED_TOLERANCE if sec.glide.get("planned") else 1.0
         # NaN where a failed integration did not reach: verify reports it
         if engine == "compiled":
-            run = replay_chunk(params, y, schedule, i0, i1, tt, rtol=rtol * tighter, atol=atol * tighter)
+            run = replay_chunk(params, y, schedule, i0, i1, tt, rtol=rtol, atol=atol)
             ys, y_end, cs = run.states, run.y_end, run.controls
         else:
-            # solve_ivp takes no rtol below 100 eps
-            traj = simulate(params, y, schedule.scalar_interpolant(i0, i1), (t0, t1),
-                            rtol=max(rtol * tighter, 100 * np.finfo(float).eps), atol=atol * tighter)
+            traj = simulate(params, y, schedule.scalar_interpolant(i0, i1), (t0, t1), rtol=rtol, atol=atol)
             ys, y_end, cs = traj(tt), traj.state[:, -1], np.vstack(schedule.interpolant(i0, i1)(tt))
         ts.append(tt)
         states.append(ys)
