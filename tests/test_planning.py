@@ -56,26 +56,6 @@ def test_a_planned_arc_is_exact_and_within_reach(arc):
     assert abs(v["xi2"][0]) <= 1e-10 and abs(v["xi2"][-1]) <= 1e-10
 
 
-def test_a_planned_section_is_replayed_ten_times_more_tightly(arc, monkeypatch):
-    import skatetrace.verification.verify as verify_module
-
-    fig, trace = arc
-    used = []
-    real = verify_module.replay_chunk
-
-    def spy(*args, rtol, atol, **kw):
-        used.append((rtol, atol))
-        return real(*args, rtol=rtol, atol=atol, **kw)
-
-    monkeypatch.setattr(verify_module, "replay_chunk", spy)
-    verify_module.verify(trace)
-    assert used and all(u == (1e-13 * verify_module.PLANNED_TOLERANCE, 1e-14 * verify_module.PLANNED_TOLERANCE)
-                        for u in used)
-    used.clear()
-    verify_module.verify(st.trace_figure(fig))  # the launch-glide-stop manoeuvre: the replay's own tolerances
-    assert used and all(u == (1e-13, 1e-14) for u in used)
-
-
 def test_a_planned_arc_is_verified_by_the_replay(arc):
     fig, _trace = arc
     result = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
