@@ -65,6 +65,9 @@ def measure(name: str, reach: float) -> dict:
         "duration_after": sum(s.duration for s in after.trace.sections if s.phases),
         "residual": max((max(s.residuals.values()) for s in after.trace.sections if s.residuals), default=float("nan")),
         "deviation": after.report.max_deviation, "tolerance": after.report.tolerance,
+        # the replay's largest speed at a cusp as a fraction of its section's fastest motion (verdict: 1e-8)
+        "cusp_rest": max((max(s["start_speed"], s["end_speed"]) / s["speed_scale"] for s in after.report.sections
+                          if s.get("traced")), default=0.0),
         "verified": bool(after.success), "feasible": bool(after.feasibility.feasible),
         "verdict": after.verdict, "message": after.message,
     }
@@ -76,6 +79,8 @@ def _verified(r: dict) -> str:
         return "yes"
     if r["deviation"] > r["tolerance"]:
         return f"no: the replay strays {r['deviation'] / r['tolerance']:.2g} x its tolerance"
+    if r["cusp_rest"] > 1e-8:
+        return f"no: the replay at a cusp moves at {r['cusp_rest']:.2g} of its fastest motion (limit 1e-8)"
     return f"no: {r['message'][:60]}"
 
 
