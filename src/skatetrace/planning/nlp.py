@@ -192,7 +192,7 @@ class SparseProgram:
         return tuple(expand(self.x))
 
     def _local_values(self, blk: _Blocks, xm, fn: ca.Function, *extra):
-        """``fn`` (a local derivative) over every block of ``blk``: the ``(nnz, N)`` values, on the unknowns ``xm``."""
+        """``fn`` (the block function or a local derivative of it) over every block of ``blk``, on the unknowns ``xm``."""
         nz, N = blk.index.shape
         z = ca.reshape(xm[blk.index.ravel(order="F").tolist()], nz, N) * ca.DM(blk.scale)
         return fn.map(N)(z, *blk.params, *extra)
