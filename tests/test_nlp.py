@@ -29,7 +29,7 @@ def test_the_assembled_hessian_is_the_lagrangians():
     f, g = prog.expanded()
     sigma, lam = ca.SX.sym("sigma"), ca.SX.sym("lam", g.numel())
     auto = ca.Function("auto", [prog.x, sigma, lam], [ca.triu(ca.hessian(sigma * f + ca.dot(lam, g), prog.x)[0])])
-    mine = prog._hessian()
+    mine = prog._functions()[1]["hess_lag"]
     rng = np.random.default_rng(1)
     for _ in range(3):
         x, s, lg = rng.normal(size=prog.n), rng.normal(), rng.normal(size=g.numel())
@@ -58,7 +58,8 @@ def test_the_assembled_jacobian_and_gradient_are_casadis():
     prog = _program()
     f, g = prog.expanded()
     auto = ca.Function("auto", [prog.x], [g, ca.jacobian(g, prog.x), f, ca.gradient(f, prog.x)])
-    jac, grad = prog._jacobian(), prog._gradient()
+    _nlp, derivatives = prog._functions()
+    jac, grad = derivatives["jac_g"], derivatives["grad_f"]
     assert jac.sparsity_out(1).nnz() == ca.jacobian(g, prog.x).nnz()  # no structural zeros added, none lost
     rng = np.random.default_rng(2)
     for _ in range(3):

@@ -99,7 +99,7 @@ class SparseProgram:
         self._g_other: list = []  # every row outside the blocks
         self._other_rows: list[np.ndarray] = []
         self._blocks: list[_Blocks] = []
-        self._derived: dict = {}  # id(fn), output kinds -> (fn, _Local): one derivation per block function
+        self._derived: dict = {}  # id(fn), output kinds -> _Local: one derivation per block function (kept by its blocks)
 
     def view(self, start: int, rows: int, cols: int = 1) -> ca.SX:
         """The unknowns ``x[start:start + rows * cols]`` as a ``rows x cols`` matrix (column-major)."""
@@ -160,8 +160,8 @@ class SparseProgram:
         shape = tuple("cost" if kind == "cost" else "rows" for kind in kinds)
         key = (id(fn), shape)
         if key not in self._derived:
-            self._derived[key] = (fn, _local_derivatives(fn, shape))
-        self._blocks.append(_Blocks(self._derived[key][1], fn, index, scale, tuple(params), tuple(rows)))
+            self._derived[key] = _local_derivatives(fn, shape)
+        self._blocks.append(_Blocks(self._derived[key], fn, index, scale, tuple(params), tuple(rows)))
 
     def _oracle(self, xm):
         """The objective and the constraints (in row order) on the unknowns ``xm``: the blocks mapped, never expanded."""
@@ -197,9 +197,19 @@ class SparseProgram:
         z = ca.reshape(xm[blk.index.ravel(order="F").tolist()], nz, N) * ca.DM(blk.scale)
         return fn.map(N)(z, *blk.params, *extra)
 
-    def _jacobian(self) -> ca.Function:
-        """``jac_g`` for IPOPT: the constraints and their Jacobian, the blocks' placed entry by entry."""
+    def _functions(self) -> tuple[dict, dict]:
+        """The program for ``nlpsol`` (on an MX vector of unknowns) and its ``hess_lag``, ``jac_g`` and ``grad_f``.
+
+        The objective and the constraints are built once (:meth:`_oracle`) and shared by the
+        program and the functions that return them beside their derivatives.
+        """
         xm = ca.MX.sym("x", self.n)
+        f, g = self._oracle(xm)
+        return {"x": xm, "f": f, "g": g}, {"hess_lag": self._hessian(), "jac_g": self._jacobian(xm, g),
+                                           "grad_f": self._gradient(xm, f)}
+
+    def _jacobian(self, xm, g) -> ca.Function:
+        """``jac_g`` for IPOPT: the constraints ``g`` on ``xm`` and their Jacobian, the blocks' placed entry by entry."""
         values, rows, cols = [], [], []
         for blk in self._blocks:
             li, lj = blk.local.jac_pattern
@@ -218,7 +228,6 @@ class SparseProgram:
                 values.append(ca.Function("other", [self.x], [ca.vertcat(*J.nonzeros())])(xm))
                 rows.append(np.concatenate(self._other_rows)[np.asarray(ri, dtype=np.int64)])
                 cols.append(np.asarray(ci, dtype=np.int64))
-        g = self._oracle(xm)[1]
         if not values:
             return ca.Function("nlp_jac_g", [xm, ca.MX.sym("p", 0)], [g, ca.MX(self._ng, self.n)],
                                ["x", "p"], ["g", "jac_g_x"])
@@ -231,9 +240,8 @@ class SparseProgram:
         J = ca.MX(sparsity, ca.vertcat(*values)[order.tolist()])
         return ca.Function("nlp_jac_g", [xm, ca.MX.sym("p", 0)], [g, J], ["x", "p"], ["g", "jac_g_x"])
 
-    def _gradient(self) -> ca.Function:
-        """``grad_f`` for IPOPT: the objective and its gradient, the blocks' summed where they share an unknown."""
-        xm = ca.MX.sym("x", self.n)
+    def _gradient(self, xm, f) -> ca.Function:
+        """``grad_f`` for IPOPT: the objective ``f`` on ``xm`` and its gradient, the blocks' summed where they share one."""
         grad = ca.MX(self.n, 1)
         for blk in self._blocks:
             lj = blk.local.grad_pattern
@@ -245,7 +253,6 @@ class SparseProgram:
             weights = blk.scale[lj, :].ravel(order="F")
             scatter = sps.csc_matrix((weights, (blk.index[lj, :].ravel(order="F"), src)), shape=(self.n, lj.size * N))
             grad = grad + ca.mtimes(ca.DM(scatter), ca.vec(local))
-        f = self._oracle(xm)[0]
         if not _is_zero(self._f_rest):
             grad = grad + ca.Function("grad_rest", [self.x], [ca.gradient(self._f_rest, self.x)])(xm)
         return ca.Function("nlp_grad_f", [xm, ca.MX.sym("p", 0)], [f, ca.densify(grad)], ["x", "p"], ["f", "grad_f_x"])
@@ -289,14 +296,10 @@ class SparseProgram:
 
     def solve(self, options: dict) -> ProgramResult:
         """Solve with IPOPT (``options`` are nlpsol options, e.g. ``ipopt.tol``). Never raises for a failed solve."""
-        xm = ca.MX.sym("x", self.n)
-        f, g = self._oracle(xm)
-        nlp = {"x": xm, "f": f, "g": g}
+        nlp, derivatives = self._functions()
         opts = dict(options)
         opts.setdefault("error_on_fail", False)
-        opts["hess_lag"] = self._hessian()
-        opts["jac_g"] = self._jacobian()
-        opts["grad_f"] = self._gradient()
+        opts.update(derivatives)
         solver = ca.nlpsol("plan", "ipopt", nlp, opts)
         lbg = np.concatenate(self._lbg) if self._lbg else np.zeros(0)
         ubg = np.concatenate(self._ubg) if self._ubg else np.zeros(0)
