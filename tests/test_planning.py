@@ -126,6 +126,8 @@ def test_the_launch_glide_stop_tracer_refuses_a_reach_instead_of_ignoring_it():
     fig = st.school_figure("three", height=1.7)
     with pytest.raises(ValueError, match="plan_figure"):
         st.trace_figure(fig, options=st.TraceOptions(reach=0.5))
+    with pytest.raises(ValueError, match="plan_figure"):
+        st.trace_section(fig.params, fig.curves[0].sections()[0], st.TraceOptions(reach=0.5))
     assert st.plan_figure is plan_figure  # the function the message names
 
 

@@ -456,7 +456,17 @@ def trace_section(
     one whose mass stays closest to the blade is kept (least largest ``|a|, |b|``, then least peak
     kinetic energy of the mass); with ``options.placement="first"`` the first is. Never raises for
     a section that cannot be traced: the result has ``success=False`` and the reason.
+
+    Raises
+    ------
+    ValueError
+        If ``options.reach`` is set: that asks for a plan within the reach, which
+        :func:`skatetrace.plan_figure` (or :func:`skatetrace.trace_and_verify`) makes; the
+        launch-glide-stop manoeuvres traced here keep the mass within no reach.
     """
+    if options.reach is not None:
+        raise ValueError(f"launch-glide-stop tracing keeps the mass within no reach; options.reach={options.reach!r} "
+                         f"asks for a plan: use skatetrace.plan_figure or skatetrace.trace_and_verify, or reach=None")
     segs = section.segments
     order = sorted(range(len(segs)), key=lambda i: -segs[i].length)
     kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
@@ -675,14 +685,8 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
     Raises
     ------
     ValueError
-        If ``options.reach`` is set: that asks for a plan within the reach, which
-        :func:`skatetrace.plan_figure` (or :func:`skatetrace.trace_and_verify`) makes; the
-        launch-glide-stop manoeuvres traced here do not keep the mass within any reach.
+        If ``options.reach`` is set (see :func:`trace_section`).
     """
-    if options.reach is not None:
-        raise ValueError(f"trace_figure traces launch-glide-stop manoeuvres, which keep the mass within no reach; "
-                         f"options.reach={options.reach!r} asks for a plan: use skatetrace.plan_figure or "
-                         f"skatetrace.trace_and_verify, or reach=None")
     params = params or figure.params or SleighParams()
     cache = {} if cache is None else cache
     traces, starts, t = [], [], 0.0
