@@ -1,0 +1,187 @@
+"""Replays of a figure under the tracking law or the open-loop schedule, for many perturbed sleighs at once.
+
+Each section is integrated over its reference duration with the classical fourth-order Runge-Kutta
+method at a fixed step, all trials side by side in numpy arrays. The sleigh of each trial may differ
+from the controller's model (``M, m, I``) and start off the figure, and the controller may see its
+state late (``delay``) and with noise on the position (``noise``).
+
+- **Open loop**: the rates are the schedule's.
+- **Closed loop**: the rates are the :class:`~skatetrace.feedback.lqr.TrackingLaw`'s.
+
+At every rest, as in the verification replay, the blade pivots by the join's angle, the mass starts
+the next section where the schedule starts it, and the momenta are those of the mass's motion at
+rest (the idealised impulse of a cusp). The blade's speed just before that impulse is the cusp speed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics.model import SleighParams, body_velocities
+from .lqr import TrackingLaw
+from .reference import Reference, rhs
+
+__all__ = ["Plant", "LoopRun", "run_loop"]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Plant:
+    """The sleighs actually skated, one per trial (arrays of shape ``(n,)``), and what the controller sees.
+
+    ``dx, dy, dtheta`` displace each curve's starting pose; ``delay`` is the age of the state the
+    controller acts on; ``noise`` the standard deviation of the error of the position it sees
+    (drawn anew at every step).
+    """
+
+    M: np.ndarray
+    m: np.ndarray
+    I: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+    dtheta: np.ndarray
+    delay: float = 0.0
+    noise: float = 0.0
+
+    @classmethod
+    def nominal(cls, params: SleighParams, n: int = 1) -> "Plant":
+        z = np.zeros(n)
+        return cls(M=np.full(n, params.M), m=np.full(n, params.m), I=np.full(n, params.I), dx=z, dy=z, dtheta=z)
+
+    @property
+    def trials(self) -> int:
+        return int(self.M.size)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class LoopRun:
+    """Samples of every trial, per section (``None`` where the section was not traced).
+
+    Each section is a dict: ``t`` local times ``(k,)``, ``state`` ``(7, k, n)`` (``p1, p2, theta, x, y,
+    a, b``), ``rates`` ``(2, k, n)``, ``xi2`` ``(k, n)`` the blade's speed, ``cusp_speed`` ``(n, 2)``
+    (the blade's speed at the rests that start and end the section).
+    """
+
+    sections: tuple
+    closed: bool
+
+    def cusp_speeds(self) -> np.ndarray:
+        """Blade speeds at every rest, shape ``(n, 2 * traced sections)``."""
+        return np.hstack([s["cusp_speed"] for s in self.sections if s is not None])
+
+
+def _start_state(ref: Reference, plant: Plant, prev_end) -> np.ndarray:
+    """State of every trial at the rest that starts a section."""
+    n = plant.trials
+    z0, u0 = ref.state_at(0.0)
+    a0, b0, ad0, bd0 = float(z0[5, 0]), float(z0[6, 0]), float(u0[0, 0]), float(u0[1, 0])
+    if prev_end is None or ref.curve_start:
+        x, y, th = z0[3, 0] + plant.dx, z0[4, 0] + plant.dy, z0[2, 0] + plant.dtheta
+    else:
+        th = prev_end[2] + (ref.join.pivot if ref.join is not None else 0.0)
+        x, y = prev_end[3], prev_end[4]
+    # at rest: the momenta of the mass's own motion (model.momenta with xi = 0), in each true sleigh
+    p1, p2 = plant.m * (a0 * bd0 - b0 * ad0), plant.m * ad0
+    return np.vstack([p1, p2, th, x, y, np.full(n, a0), np.full(n, b0)])
+
+
+class _Section:
+    """One section's integration for all trials: the controller, the delay line, the steps."""
+
+    def __init__(self, ref: Reference, plant: Plant, law: TrackingLaw | None, h: float, capacity: int):
+        self.ref, self.plant, self.law, self.h = ref, plant, law, h
+        n = plant.trials
+        self.hist = np.empty((capacity, 7, n))  # states at t = k h, for the delay line
+        self.count = 0
+        self.noise = np.zeros((2, n))
+
+    def remember(self, z: np.ndarray) -> None:
+        self.hist[self.count] = z
+        self.count += 1
+
+    def measured(self, t: float, z: np.ndarray) -> np.ndarray:
+        """The state the controller sees at time ``t``: ``delay`` old, with noise on the position."""
+        d = self.plant.delay
+        if d > 0.0 and self.count:
+            tm = max(t - d, 0.0) / self.h
+            j = min(int(tm), self.count - 1)
+            j1 = min(j + 1, self.count - 1)
+            w = min(tm - j, 1.0)
+            z = (1 - w) * self.hist[j] + w * self.hist[j1]
+        if self.plant.noise > 0.0:
+            z = z.copy()
+            z[3:5] += self.noise
+        return z
+
+    def rates(self, t: float, z: np.ndarray):
+        if self.law is None:
+            _, u = self.ref.state_at(np.full(z.shape[1], t))
+            return u[0], u[1]
+        # a late measurement is compared with the reference at its own time
+        return self.law.rates(t, self.measured(t, z), max(t - self.plant.delay, 0.0))
+
+    def derivative(self, t: float, z: np.ndarray) -> np.ndarray:
+        p = self.plant
+        return rhs(p.M, p.m, p.I, z, *self.rates(t, z))
+
+    def step(self, t: float, z: np.ndarray, h: float) -> np.ndarray:
+        k1 = self.derivative(t, z)
+        k2 = self.derivative(t + 0.5 * h, z + 0.5 * h * k1)
+        k3 = self.derivative(t + 0.5 * h, z + 0.5 * h * k2)
+        k4 = self.derivative(t + h, z + h * k3)
+        return z + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    def speed(self, t: float, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        ad, bd = self.rates(t, z)
+        p = self.plant
+        _, xi2, _ = body_velocities(p.M, p.m, p.I, z[0], z[1], z[5], z[6], ad, bd)
+        return xi2, np.vstack([ad, bd])
+
+
+def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw | None] | None, *,
+             steps: int = 4000, seed: int = 0) -> LoopRun:
+    """Integrate every section of a figure for every trial.
+
+    Parameters
+    ----------
+    refs : list of Reference or None
+        The sections in skating order (``None``: not traced; the next one starts from the layout).
+    laws : list of TrackingLaw, or None
+        One per section (closed loop), or ``None`` to replay the open-loop schedule.
+    steps : int
+        Runge-Kutta steps per section (at most the delay apart when there is one).
+    seed : int
+        Seed of the measurement noise.
+    """
+    rng = np.random.default_rng(seed)
+    n = plant.trials
+    out = []
+    prev_end = None
+    for si, ref in enumerate(refs):
+        if ref is None:
+            out.append(None)
+            prev_end = None
+            continue
+        T = ref.duration
+        count = max(steps, int(math.ceil(T / plant.delay)) if plant.delay > 0.0 else 0)
+        h = T / count
+        sec = _Section(ref, plant, None if laws is None else laws[si], h, count + 2)
+        z = _start_state(ref, plant, prev_end)
+        ts, zs, rs, vs = np.empty(count + 1), np.empty((7, count + 1, n)), np.empty((2, count + 1, n)), \
+            np.empty((count + 1, n))
+        for k in range(count + 1):
+            t = k * h
+            ts[k], zs[:, k] = t, z
+            vs[k], rs[:, k] = sec.speed(t, z)
+            if k == count:
+                break
+            sec.remember(z)
+            if plant.noise > 0.0:
+                sec.noise = rng.normal(0.0, plant.noise, (2, n))
+            z = sec.step(t, z, h)
+        out.append({"t": ts, "state": zs, "rates": rs, "xi2": vs,
+                    "cusp_speed": np.abs(np.vstack([vs[0], vs[-1]])).T})
+        prev_end = z
+    return LoopRun(sections=tuple(out), closed=laws is not None)

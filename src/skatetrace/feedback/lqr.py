@@ -1,0 +1,194 @@
+"""The tracking law: a time-varying linear-quadratic regulator about the exact trace of each section.
+
+Why not the curvature law
+-------------------------
+The natural idea (command the blade's curvature ``kappa(s) + corrections`` through the curvature
+condition, as the tracer holds the figure) fails in the glide. There the mass sits over the blade
+(``a = 0``); ``adot`` then reaches the blade's speed but not its turning rate, and ``bdot`` reaches
+neither: the turning rate changes only through the momentum (``dp1/dt = -m (a xi1 + bdot) xi2``).
+Holding a corrected curvature instantly forces the speed to absorb every correction, and the loop
+is unstable (measured: errors of 1e-9 grow to a 5e-3 limit cycle within a second on the circle eight).
+
+The law
+-------
+Let ``z = (p1, p2, theta, x, y, a, b)`` be the sleigh's state with the mass position and
+``u = (adot, bdot)`` the mass rates, ``dz/dt = f(z, u)`` the full model (eqs. p1_eq-y_eq and
+``d(a, b)/dt = u``), and ``(z_r(t), u_r(t))`` the exact trace of a section. Linearised about it,
+``d(dz)/dt = A(t) dz + B(t) du``. The law is
+
+    u = u_r(t) - K(t) (z - z_r(t)),      K = R^-1 B^T P,
+
+with ``P`` the solution of the Riccati equation ``-dP/dt = A^T P + P A - P B R^-1 B^T P + Q``
+integrated backwards from ``P(T) = Q`` over the section. It minimises
+``integral(dz^T Q dz + du^T R du) dt`` for the linearised error, so it uses whatever lever the
+configuration offers at each instant (the speed through ``adot`` at a stop, the turning rate
+through the momentum in a glide), and the closed loop's error decays wherever the linearisation
+is stabilisable. Exactly on the trace (``dz = 0``) it gives the trace's own rates: it changes
+nothing the tracer proved, and corrects only what departs from it.
+
+Weights by Bryson's rule (each error or rate divided by what is acceptable): positions by the
+convergence length ``L`` (default a hundredth of the figure's size), heading by ``L / size``,
+momenta by the same fraction of their largest value on the section, the mass position by ``L``,
+the mass position by a tenth of its largest distance from the blade (at least ``L``), and the
+rates by the fastest mass rate of the section (times ``rate_weight``, default 100: see
+:class:`TrackingGains`).
+
+Limits (measured, work in progress for issue 16)
+------------------------------------------------
+- On the trace it reproduces the exact motion: the circle eight (1.7 m skater) stays within
+  1.7e-9 of its size in a nominal closed-loop run (the open-loop schedule on the same integrator:
+  1.7e-7), with rests at 1.7e-8 m/s. The rests of the two arcs of ``tests/test_feedback.py``
+  (model units) are reached only to about 1e-6 of the speed.
+- Its reference is indexed by time. Under +-1 % parameter error the circle eight strays up to
+  3.4e-3 of its size (open loop: metres); at +-5 % some trials diverge, because a sleigh that is
+  faster or slower than the model falls behind or ahead of the clock, and pulling it back along
+  the figure needs rates far outside the linearisation. A reference indexed by progress along the
+  figure is the next step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics.model import SleighParams
+from .reference import Reference, rhs
+
+__all__ = ["TrackingGains", "TrackingLaw", "default_gains", "design"]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class TrackingGains:
+    """What the regulator treats as an acceptable error, in the figure's units (Bryson's rule).
+
+    Parameters
+    ----------
+    length : float
+        Acceptable position error of the blade and of the mass: errors are corrected over
+        distances of this order.
+    size : float
+        The figure's size: an acceptable heading error is ``length / size``, an acceptable
+        momentum error the same fraction of the section's largest momentum.
+    rate_weight : float
+        Multiplies the cost of the rates relative to Bryson's (the fastest mass rate of the section
+        as acceptable). The default 100 keeps the closed loop's fastest mode near 200 /s on the
+        circle eight (1.2e4 /s at 1, 1.2e3 /s at 10); faster modes need steps far below a
+        millisecond and do not survive a delay of a few milliseconds.
+    mass : float
+        Acceptable error of the mass position as a fraction of its largest distance from the blade
+        on the section (at least ``length``).
+    """
+
+    length: float
+    size: float
+    rate_weight: float = 100.0
+    mass: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name in ("length", "size", "rate_weight", "mass"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                    or not (math.isfinite(v) and v > 0):
+                raise ValueError(f"tracking gain `{name}` must be a positive finite number, got {v!r}")
+            object.__setattr__(self, name, float(v))
+
+    def to_dict(self) -> dict[str, float]:
+        return {"length": self.length, "size": self.size, "rate_weight": self.rate_weight, "mass": self.mass}
+
+
+def default_gains(size: float) -> TrackingGains:
+    """``length`` a hundredth of the figure's size: a correction stays local to the figure."""
+    return TrackingGains(length=0.01 * size, size=size)
+
+
+def _jacobians(p: SleighParams, z: np.ndarray, u: np.ndarray):
+    """``A = df/dz`` (k, 7, 7) and ``B = df/du`` (k, 7, 2) at the columns of ``z`` (7, k), ``u`` (2, k),
+    by central differences (the model is smooth; steps of 1e-6 of each variable's scale)."""
+    k = z.shape[1]
+    A, B = np.empty((k, 7, 7)), np.empty((k, 7, 2))
+    zs = np.maximum(np.max(np.abs(z), axis=1, keepdims=True), 1e-3) * 1e-6
+    us = np.maximum(np.max(np.abs(u), axis=1, keepdims=True), 1e-3) * 1e-6
+    for j in range(7):
+        dz = np.zeros_like(z)
+        dz[j] = zs[j]
+        A[:, :, j] = ((rhs(p.M, p.m, p.I, z + dz, *u) - rhs(p.M, p.m, p.I, z - dz, *u)) / (2 * zs[j])).T
+    for j in range(2):
+        du = np.zeros_like(u)
+        du[j] = us[j]
+        B[:, :, j] = ((rhs(p.M, p.m, p.I, z, *(u + du)) - rhs(p.M, p.m, p.I, z, *(u - du))) / (2 * us[j])).T
+    return A, B
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class TrackingLaw:
+    """The regulator of one section: gains ``K`` (k, 2, 7) at the reference's times ``t`` (k,)."""
+
+    reference: Reference
+    t: np.ndarray
+    K: np.ndarray
+
+    def rates(self, tau, z: np.ndarray, measured_at=None) -> tuple[np.ndarray, np.ndarray]:
+        """Mass rates at section time ``tau`` for states ``z`` (7, n) measured at ``measured_at``
+        (default ``tau``): the schedule's rates at ``tau`` minus the gain times the measured error."""
+        ref = self.reference
+        tm = tau if measured_at is None else measured_at
+        _, ur = ref.state_at(np.broadcast_to(np.asarray(tau, dtype=float), (z.shape[1],)))
+        zr, _ = ref.state_at(np.broadcast_to(np.asarray(tm, dtype=float), (z.shape[1],)))
+        dz = z - zr
+        dz[2] = (dz[2] + np.pi) % (2 * np.pi) - np.pi
+        du = np.einsum("nij,jn->in", self.gain(tm, z.shape[1]), dz)
+        return ur[0] - du[0], ur[1] - du[1]
+
+    def gain(self, tau, n: int = 1) -> np.ndarray:
+        """``K`` at section times ``tau`` (linear between the rows), shape ``(n, 2, 7)``."""
+        t = self.t
+        tq = np.clip(np.broadcast_to(np.asarray(tau, dtype=float), (n,)), t[0], t[-1])
+        j = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, t.size - 2)
+        h = t[j + 1] - t[j]
+        w = np.where(h > 0, (tq - t[j]) / np.where(h > 0, h, 1.0), 0.0)
+        return (1 - w)[:, None, None] * self.K[j] + w[:, None, None] * self.K[j + 1]
+
+
+def design(ref: Reference, params: SleighParams, gains: TrackingGains) -> TrackingLaw:
+    """Solve the section's Riccati equation backwards over the reference's rows."""
+    from scipy.integrate import solve_ivp
+
+    t = ref.grid
+    z, u = ref.state_at(t)
+    A, B = _jacobians(params, z, u)
+    L = gains.length
+    frac = L / gains.size
+    pscale = frac * max(float(np.max(np.abs(z[:2]))), 1e-300)
+    ascale = max(gains.mass * float(np.max(np.hypot(z[5], z[6]))), L)
+    q = np.array([1 / pscale**2, 1 / pscale**2, 1 / frac**2, 1 / L**2, 1 / L**2, 1 / ascale**2, 1 / ascale**2])
+    uscale = max(float(np.max(np.abs(u))), 1e-300)
+    Rinv = np.full(2, uscale**2 / gains.rate_weight)
+    # scaled coordinates (dz = S y with S = diag(1/sqrt(q))) keep the Riccati equation well balanced
+    s = 1 / np.sqrt(q)
+    As = A * (1 / s)[None, :, None] * s[None, None, :]
+    Bs = B * (1 / s)[None, :, None]
+
+    def coeffs(tt):
+        j = min(max(int(np.searchsorted(t, tt, side="right")) - 1, 0), t.size - 2)
+        h = t[j + 1] - t[j]
+        w = (tt - t[j]) / h if h > 0 else 0.0
+        return (1 - w) * As[j] + w * As[j + 1], (1 - w) * Bs[j] + w * Bs[j + 1]
+
+    def riccati(tt, pv):
+        P = pv.reshape(7, 7)
+        Aj, Bj = coeffs(tt)
+        PB = P @ Bj
+        dP = -(Aj.T @ P + P @ Aj - (PB * Rinv) @ PB.T + np.eye(7))
+        return dP.ravel()
+
+    T = float(t[-1])
+    sol = solve_ivp(riccati, (T, float(t[0])), np.eye(7).ravel(), method="LSODA", rtol=1e-6, atol=1e-9,
+                    dense_output=True)
+    Ps = sol.sol(t).T.reshape(-1, 7, 7)
+    Ps = 0.5 * (Ps + np.transpose(Ps, (0, 2, 1)))
+    # K (in the original coordinates) = R^-1 B^T P_original, with P_original = S^-1 P_scaled S^-1
+    Ks = Rinv[None, :, None] * np.einsum("kji,kjl->kil", Bs, Ps)
+    K = Ks * (1 / s)[None, None, :]
+    return TrackingLaw(reference=ref, t=t, K=K)

@@ -1,0 +1,117 @@
+"""The exact trace as a reference for feedback: per section, the state and the mass rates over time.
+
+A :class:`Reference` holds one section's sampled exact motion: the rows of ``controls.csv``
+(``t, a, b, adot, bdot`` and the solver's ``p1, p2, theta, x, y`` there). Between rows the state is
+the cubic Hermite interpolant whose slopes are the model's own derivatives at the rows, and the mass
+position the interpolant the replay uses, so that ``adot, bdot`` are its derivatives.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics.controls import ControlSchedule
+from ..dynamics.model import SleighParams, body_velocities
+from ..figures.figure import Join, Section
+
+__all__ = ["Reference", "references", "rhs", "section_reference"]
+
+
+def rhs(M, m, I, z, ad, bd):
+    """``dz/dt`` of ``z = (p1, p2, theta, x, y, a, b)`` (rows) under mass rates ``ad, bd``: eqs. (p1_eq)-(y_eq)."""
+    xi1, xi2, eta = body_velocities(M, m, I, z[0], z[1], z[5], z[6], ad, bd)
+    return np.stack([-m * eta * xi2, m * eta * xi1, xi1, xi2 * np.cos(z[2]), xi2 * np.sin(z[2]),
+                     np.broadcast_to(ad, xi1.shape), np.broadcast_to(bd, xi1.shape)])
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Reference:
+    """One section of an exact trace.
+
+    ``grid`` are times from the section's start (non-decreasing; a repeated time is a jump of the
+    rates); ``z`` the states ``(p1, p2, theta, x, y, a, b)`` there, shape ``(7, k)``, ``zdot`` their
+    derivatives, ``u`` the rates ``(adot, bdot)``; ``piece`` the figure's piece of each row;
+    ``join`` the join before the section (its pivot is applied at the rest that starts it),
+    ``None`` at a curve's start.
+    """
+
+    grid: np.ndarray
+    z: np.ndarray
+    zdot: np.ndarray
+    piece: np.ndarray
+    join: Join | None
+    curve_start: bool
+
+    @property
+    def duration(self) -> float:
+        return float(self.grid[-1])
+
+    def state_at(self, tau) -> tuple[np.ndarray, np.ndarray]:
+        """States ``(7, n)`` and rates ``(2, n)`` at section times ``tau`` (clamped to the section;
+        from the right at a jump)."""
+        t = self.grid
+        tau = np.clip(np.atleast_1d(np.asarray(tau, dtype=float)), t[0], t[-1])
+        k = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, t.size - 2)
+        h = t[k + 1] - t[k]
+        ok = h > 0
+        hs = np.where(ok, h, 1.0)
+        u = np.where(ok, (tau - t[k]) / hs, 0.0)
+        y0, y1 = self.z[:, k], self.z[:, k + 1]
+        d0, d1 = self.zdot[:, k] * hs, self.zdot[:, k + 1] * hs
+        val = (2 * u**3 - 3 * u**2 + 1) * y0 + (u**3 - 2 * u**2 + u) * d0 + (-2 * u**3 + 3 * u**2) * y1 \
+            + (u**3 - u**2) * d1
+        der = ((6 * u**2 - 6 * u) * y0 + (3 * u**2 - 4 * u + 1) * d0 + (-6 * u**2 + 6 * u) * y1
+               + (3 * u**2 - 2 * u) * d1) / hs
+        val = np.where(ok, val, y0)
+        rates = np.where(ok, der[5:7], self.zdot[5:7, k])
+        return val, rates
+
+
+def references(sections: list[Section], schedule: ControlSchedule, states: dict[str, np.ndarray],
+               start_times, params: SleighParams) -> list[Reference | None]:
+    """One :class:`Reference` per section from a sampled schedule and its solver states.
+
+    ``states`` holds ``x, y, theta, p1, p2`` at the schedule's rows (as
+    :func:`~skatetrace.verification.verify.schedule_from_trace` returns them, or as read from
+    ``controls.csv``). A section without rows (not traced) gets ``None``.
+    """
+    out: list[Reference | None] = []
+    for si, (section, t0) in enumerate(zip(sections, start_times)):
+        rows = np.flatnonzero(schedule.section == si)
+        if rows.size < 2:
+            out.append(None)
+            continue
+        z = np.vstack([states["p1"][rows], states["p2"][rows], states["theta"][rows], states["x"][rows],
+                       states["y"][rows], schedule.a[rows], schedule.b[rows]])
+        zdot = rhs(params.M, params.m, params.I, z, schedule.adot[rows], schedule.bdot[rows])
+        first = section.pieces[0]
+        out.append(Reference(grid=schedule.t[rows] - float(t0), z=z, zdot=zdot, piece=schedule.piece[rows],
+                             join=first.join_before, curve_start=first.join_before is None))
+    return out
+
+
+def section_reference(sec, params: SleighParams, *, points: int = 20_000) -> Reference:
+    """A :class:`Reference` sampled from a traced section itself (the exact motion at any time).
+
+    ``points`` times spread evenly over the section, and both sides of every breakpoint (where the
+    rates jump): fine enough that the interpolated state stays within about 1e-10 of the figure's
+    size of the exact motion, far finer than the rows of ``controls.csv``.
+    """
+    bps = sec.breakpoints()
+    T = float(bps[-1])
+    t = np.union1d(np.linspace(0.0, T, points), bps)
+    right = sec.evaluate(t)
+    inner = bps[1:-1]
+    if inner.size:
+        left = sec.evaluate(inner, side="left")
+        idx = np.searchsorted(t, inner)
+        t = np.insert(t, idx, inner)
+        right = {k: np.insert(right[k], idx, left[k]) for k in right}
+    z = np.vstack([right[k] for k in ("p1", "p2", "theta", "x", "y", "a", "b")])
+    zdot = rhs(params.M, params.m, params.I, z, right["adot"], right["bdot"])
+    pieces = np.array([p.index for p in sec.section.pieces])[right["segment"]]
+    first = sec.section.pieces[0]
+    return Reference(grid=t, z=z, zdot=zdot, piece=pieces, join=first.join_before,
+                     curve_start=first.join_before is None)
