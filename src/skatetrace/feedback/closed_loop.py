@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.model import SleighParams, body_velocities
+from ..dynamics.model import SleighParams, body_velocities, momenta
 from .lqr import TrackingLaw
 from .reference import Reference, rhs
 
@@ -82,24 +82,19 @@ def _start_state(ref: Reference, plant: Plant, prev_end) -> np.ndarray:
     else:
         th = prev_end[2] + (ref.join.pivot if ref.join is not None else 0.0)
         x, y = prev_end[3], prev_end[4]
-    # at rest: the momenta of the mass's own motion (model.momenta with xi = 0), in each true sleigh
-    p1, p2 = plant.m * (a0 * bd0 - b0 * ad0), plant.m * ad0
+    # at rest: the momenta of the mass's own motion, in each true sleigh
+    p1, p2 = momenta(plant, 0.0, 0.0, a0, b0, ad0, bd0)
     return np.vstack([p1, p2, th, x, y, np.full(n, a0), np.full(n, b0)])
 
 
 class _Section:
     """One section's integration for all trials: the controller, the delay line, the steps."""
 
-    def __init__(self, ref: Reference, plant: Plant, law: TrackingLaw | None, h: float, capacity: int):
+    def __init__(self, ref: Reference, plant: Plant, law: TrackingLaw | None, h: float, history: np.ndarray):
         self.ref, self.plant, self.law, self.h = ref, plant, law, h
-        n = plant.trials
-        self.hist = np.empty((capacity, 7, n))  # states at t = k h, for the delay line
-        self.count = 0
-        self.noise = np.zeros((2, n))
-
-    def remember(self, z: np.ndarray) -> None:
-        self.hist[self.count] = z
-        self.count += 1
+        self.hist = history  # (7, k, n): the states recorded at t = j h, read by the delay line
+        self.count = 0  # how many of them are recorded
+        self.noise = np.zeros((2, plant.trials))
 
     def measured(self, t: float, z: np.ndarray) -> np.ndarray:
         """The state the controller sees at time ``t``: ``delay`` old, with noise on the position."""
@@ -109,7 +104,7 @@ class _Section:
             j = min(int(tm), self.count - 1)
             j1 = min(j + 1, self.count - 1)
             w = min(tm - j, 1.0)
-            z = (1 - w) * self.hist[j] + w * self.hist[j1]
+            z = (1 - w) * self.hist[:, j] + w * self.hist[:, j1]
         if self.plant.noise > 0.0:
             z = z.copy()
             z[3:5] += self.noise
@@ -122,18 +117,19 @@ class _Section:
         # a late measurement is compared with the reference at its own time
         return self.law.rates(t, self.measured(t, z), max(t - self.plant.delay, 0.0))
 
-    def derivative(self, t: float, z: np.ndarray) -> np.ndarray:
-        p = self.plant
-        return rhs(p.M, p.m, p.I, z, *self.rates(t, z))
+    def derivative(self, t: float, z: np.ndarray, rates=None) -> np.ndarray:
+        return rhs(self.plant, z, *(self.rates(t, z) if rates is None else rates))
 
-    def step(self, t: float, z: np.ndarray, h: float) -> np.ndarray:
-        k1 = self.derivative(t, z)
+    def step(self, t: float, z: np.ndarray, h: float, rates) -> np.ndarray:
+        """One Runge-Kutta step from ``(t, z)``, where the rates are ``rates`` (already evaluated)."""
+        k1 = self.derivative(t, z, rates)
         k2 = self.derivative(t + 0.5 * h, z + 0.5 * h * k1)
         k3 = self.derivative(t + 0.5 * h, z + 0.5 * h * k2)
         k4 = self.derivative(t + h, z + h * k3)
         return z + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
     def speed(self, t: float, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The blade's speed and the rates ``(2, n)`` at ``(t, z)``."""
         ad, bd = self.rates(t, z)
         p = self.plant
         _, xi2, _ = body_velocities(p.M, p.m, p.I, z[0], z[1], z[5], z[6], ad, bd)
@@ -167,20 +163,20 @@ def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw 
         T = ref.duration
         count = max(steps, int(math.ceil(T / plant.delay)) if plant.delay > 0.0 else 0)
         h = T / count
-        sec = _Section(ref, plant, None if laws is None else laws[si], h, count + 2)
-        z = _start_state(ref, plant, prev_end)
         ts, zs, rs, vs = np.empty(count + 1), np.empty((7, count + 1, n)), np.empty((2, count + 1, n)), \
             np.empty((count + 1, n))
+        sec = _Section(ref, plant, None if laws is None else laws[si], h, zs)
+        z = _start_state(ref, plant, prev_end)
         for k in range(count + 1):
             t = k * h
             ts[k], zs[:, k] = t, z
+            sec.count = k + 1
+            if plant.noise > 0.0:
+                sec.noise = rng.normal(0.0, plant.noise, (2, n))
             vs[k], rs[:, k] = sec.speed(t, z)
             if k == count:
                 break
-            sec.remember(z)
-            if plant.noise > 0.0:
-                sec.noise = rng.normal(0.0, plant.noise, (2, n))
-            z = sec.step(t, z, h)
+            z = sec.step(t, z, h, rs[:, k])
         out.append({"t": ts, "state": zs, "rates": rs, "xi2": vs,
                     "cusp_speed": np.abs(np.vstack([vs[0], vs[-1]])).T})
         prev_end = z

@@ -113,11 +113,11 @@ def _jacobians(p: SleighParams, z: np.ndarray, u: np.ndarray):
     for j in range(7):
         dz = np.zeros_like(z)
         dz[j] = zs[j]
-        A[:, :, j] = ((rhs(p.M, p.m, p.I, z + dz, *u) - rhs(p.M, p.m, p.I, z - dz, *u)) / (2 * zs[j])).T
+        A[:, :, j] = ((rhs(p, z + dz, *u) - rhs(p, z - dz, *u)) / (2 * zs[j])).T
     for j in range(2):
         du = np.zeros_like(u)
         du[j] = us[j]
-        B[:, :, j] = ((rhs(p.M, p.m, p.I, z, *(u + du)) - rhs(p.M, p.m, p.I, z, *(u - du))) / (2 * us[j])).T
+        B[:, :, j] = ((rhs(p, z, *(u + du)) - rhs(p, z, *(u - du))) / (2 * us[j])).T
     return A, B
 
 
@@ -133,12 +133,15 @@ class TrackingLaw:
         """Mass rates at section time ``tau`` for states ``z`` (7, n) measured at ``measured_at``
         (default ``tau``): the schedule's rates at ``tau`` minus the gain times the measured error."""
         ref = self.reference
-        tm = tau if measured_at is None else measured_at
-        _, ur = ref.state_at(np.broadcast_to(np.asarray(tau, dtype=float), (z.shape[1],)))
-        zr, _ = ref.state_at(np.broadcast_to(np.asarray(tm, dtype=float), (z.shape[1],)))
+        n = z.shape[1]
+        zr, ur = ref.state_at(np.broadcast_to(np.asarray(tau, dtype=float), (n,)))
+        tm = tau
+        if measured_at is not None and np.any(np.asarray(measured_at) != np.asarray(tau)):
+            tm = measured_at
+            zr, _ = ref.state_at(np.broadcast_to(np.asarray(tm, dtype=float), (n,)))
         dz = z - zr
         dz[2] = (dz[2] + np.pi) % (2 * np.pi) - np.pi
-        du = np.einsum("nij,jn->in", self.gain(tm, z.shape[1]), dz)
+        du = np.einsum("nij,jn->in", self.gain(tm, n), dz)
         return ur[0] - du[0], ur[1] - du[1]
 
     def gain(self, tau, n: int = 1) -> np.ndarray:

@@ -13,17 +13,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..dynamics.controls import ControlSchedule
-from ..dynamics.model import SleighParams, body_velocities
+from ..dynamics.model import SleighParams
+from ..dynamics.model import rhs as model_rhs
 from ..figures.figure import Join, Section
 
 __all__ = ["Reference", "references", "rhs", "section_reference"]
 
 
-def rhs(M, m, I, z, ad, bd):
-    """``dz/dt`` of ``z = (p1, p2, theta, x, y, a, b)`` (rows) under mass rates ``ad, bd``: eqs. (p1_eq)-(y_eq)."""
-    xi1, xi2, eta = body_velocities(M, m, I, z[0], z[1], z[5], z[6], ad, bd)
-    return np.stack([-m * eta * xi2, m * eta * xi1, xi1, xi2 * np.cos(z[2]), xi2 * np.sin(z[2]),
-                     np.broadcast_to(ad, xi1.shape), np.broadcast_to(bd, xi1.shape)])
+def rhs(params, z, ad, bd):
+    """``dz/dt`` of ``z = (p1, p2, theta, x, y, a, b)`` (rows) under mass rates ``ad, bd``.
+
+    The sleigh's five rows are :func:`skatetrace.dynamics.model.rhs`; ``params`` is anything with
+    ``M, m, I`` (a :class:`SleighParams`, or arrays of one value per trial).
+    """
+    return np.vstack([model_rhs(params, z[:5], z[5], z[6], ad, bd),
+                      np.broadcast_to(ad, z.shape[1:]), np.broadcast_to(bd, z.shape[1:])])
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -85,7 +89,7 @@ def references(sections: list[Section], schedule: ControlSchedule, states: dict[
             continue
         z = np.vstack([states["p1"][rows], states["p2"][rows], states["theta"][rows], states["x"][rows],
                        states["y"][rows], schedule.a[rows], schedule.b[rows]])
-        zdot = rhs(params.M, params.m, params.I, z, schedule.adot[rows], schedule.bdot[rows])
+        zdot = rhs(params, z, schedule.adot[rows], schedule.bdot[rows])
         first = section.pieces[0]
         out.append(Reference(grid=schedule.t[rows] - float(t0), z=z, zdot=zdot, piece=schedule.piece[rows],
                              join=first.join_before, curve_start=first.join_before is None))
@@ -110,7 +114,7 @@ def section_reference(sec, params: SleighParams, *, points: int = 20_000) -> Ref
         t = np.insert(t, idx, inner)
         right = {k: np.insert(right[k], idx, left[k]) for k in right}
     z = np.vstack([right[k] for k in ("p1", "p2", "theta", "x", "y", "a", "b")])
-    zdot = rhs(params.M, params.m, params.I, z, right["adot"], right["bdot"])
+    zdot = rhs(params, z, right["adot"], right["bdot"])
     pieces = np.array([p.index for p in sec.section.pieces])[right["segment"]]
     first = sec.section.pieces[0]
     return Reference(grid=t, z=z, zdot=zdot, piece=pieces, join=first.join_before,
