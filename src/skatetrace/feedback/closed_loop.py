@@ -181,3 +181,64 @@ def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw 
                     "cusp_speed": np.abs(np.vstack([vs[0], vs[-1]])).T})
         prev_end = z
     return LoopRun(sections=tuple(out), closed=laws is not None)
+
+
+def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out, *, rtol: float = 1e-12,
+               atol: float = 1e-14):
+    """One sleigh (the model itself) under the law, integrated accurately: DOP853 between the rate jumps.
+
+    Parameters
+    ----------
+    z0 : array_like, shape (7,)
+        State ``(p1, p2, theta, x, y, a, b)`` at the section's start.
+    t_out : array_like
+        Section times (non-decreasing, within the section) at which to report.
+    rtol, atol : float
+        DOP853's tolerances; ``atol`` is relative to each variable's largest value on the reference.
+
+    Returns
+    -------
+    states : ndarray, shape (7, n)
+    rates : ndarray, shape (2, n)
+        The law's rates at ``t_out`` (from the right at a jump).
+    correction : float
+        The largest feedback term ``|K (z - z_ref)|`` met at ``t_out``, relative to the section's
+        fastest scheduled rate: how far the law had to depart from the schedule.
+    success : bool
+        False if an integration failed (the states from there on are NaN).
+    """
+    from scipy.integrate import solve_ivp
+
+    t_out = np.asarray(t_out, dtype=float)
+    grid = ref.grid
+    cuts = np.concatenate([[grid[0]], grid[1:][np.diff(grid) == 0.0], [grid[-1]]])
+    scale = np.maximum(np.max(np.abs(ref.z), axis=1), 1e-300) * atol
+
+    def f(t, z):
+        ad, bd = law.rates(t, z[:, None])
+        return rhs(params, z[:, None], ad, bd)[:, 0]
+
+    states = np.full((7, t_out.size), np.nan)
+    z = np.asarray(z0, dtype=float)
+    ok = True
+    for c0, c1 in zip(cuts[:-1], cuts[1:]):
+        inside = (t_out >= c0) & ((t_out < c1) | (c1 == cuts[-1]) & (t_out <= c1))
+        if c1 > c0:
+            # a jump of the rates at c0: the law is read from the right there (just inside the chunk)
+            sol = solve_ivp(f, (c0, c1), z, method="DOP853", rtol=rtol, atol=scale, dense_output=True)
+            if not sol.success or not np.all(np.isfinite(sol.y[:, -1])):
+                ok = False
+                break
+            if np.any(inside):
+                states[:, inside] = sol.sol(t_out[inside])
+            z = sol.y[:, -1]
+        elif np.any(inside):
+            states[:, inside] = z[:, None]
+    ur = ref.state_at(t_out)[1]
+    finite = np.all(np.isfinite(states), axis=0)
+    rates = np.full((2, t_out.size), np.nan)
+    if np.any(finite):
+        rates[:, finite] = np.vstack(law.rates(t_out[finite], states[:, finite]))
+    rate_scale = max(float(np.max(np.abs(ref.zdot[5:7]))), 1e-300)
+    correction = float(np.max(np.abs(rates[:, finite] - ur[:, finite]), initial=0.0)) / rate_scale
+    return states, rates, correction, ok and bool(np.all(finite))

@@ -11,6 +11,12 @@ join's angle, and the momenta are those of the mass's motion at rest. It then me
 - the speed at every cusp,
 - the drift of ``p1 + r p2`` on each arc and of ``p2`` on each line (both are invariants there;
   a spiral has no such invariant).
+
+Where a section fails, the replay's conditioning is measured (its spread under a ``1e-12``
+change of the controls). Where that spread is too large for the check to mean anything, the
+section is verified by the closed loop instead (the model under the tracking law about the
+trace, :mod:`skatetrace.feedback`), with the same tolerances and a bound on how far the law
+departs from the schedule. Tolerances are never loosened.
 """
 
 from __future__ import annotations
@@ -353,6 +359,175 @@ def _nearer(d: np.ndarray, pts: np.ndarray, placed, xy: np.ndarray) -> np.ndarra
     return out
 
 
+def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
+    """Deviation, cusp speeds and invariant drift of the replay ``rep``, section by section.
+
+    ``only``: the sections to measure (default all). Returns ``{section: (record, drifts)}``.
+    """
+    params = trace.params
+    xi1, xi2, _ = rep.velocities(params)
+    out = {}
+    # each section's rows, found once (not with a mask over the whole replay per section)
+    total_length = sum(p.segment.length for sec in trace.sections for p in sec.section.pieces)
+    density = min(200.0, MAX_FIGURE_SAMPLES / max(total_length, 1e-300))  # target points per unit length
+    order = np.argsort(rep.section, kind="stable")
+    cuts = np.searchsorted(rep.section[order], np.arange(len(trace.sections) + 1))
+    for si, sec in enumerate(trace.sections):
+        if only is not None and si not in only:
+            continue
+        idx = order[cuts[si]:cuts[si + 1]]
+        if not sec.phases or not idx.size:
+            out[si] = ({"section": si, "traced": False, "passed": False, "message": sec.message}, [])
+            continue
+        sub = rep.take(idx)
+        sxi1, sxi2 = xi1[idx], xi2[idx]
+        pts = sub.state[3:5]
+        # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
+        samples = [segment_points(p.start, p.segment, 65) for p in sec.section.pieces]
+        d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0]
+        d_from = np.zeros(0)
+        for p, xy in zip(sec.section.pieces, samples):
+            d_to = _nearer(d_to, pts, p, xy)
+            n = max(64, int(p.segment.length * density))
+            # Each piece's points are matched with the stretch of replay labelled with that piece
+            # (one sample more each side): where two pieces pass close to each other, as at the
+            # waist of a figure eight, the nearest sample may otherwise belong to the other one.
+            own = np.flatnonzero(sub.piece == p.index)
+            mp = np.zeros(idx.size, dtype=bool)
+            if own.size:
+                mp[max(own[0] - 1, 0):own[-1] + 2] = True
+            else:
+                mp[:] = True
+            d_from = np.concatenate([d_from, _figure_to_replay(segment_points(p.start, p.segment, n), sub, mp, params)])
+        speeds = (abs(float(sxi2[0])), abs(float(sxi2[-1])))
+        # "At rest" means below 1e-8 of the fastest motion in the section (the glide, the blade, or
+        # the mass relative to the ice): the replay resolves speeds to a fraction of that scale.
+        a, b, ad, bd = sub.controls
+        mass_speed = np.hypot(sxi2 - sxi1 * b + ad, sxi1 * a + bd)
+        speed_scale = max(trace.options.speed, float(np.max(np.abs(sxi2))), float(np.max(mass_speed)))
+        cusp_limit = 1e-8 * speed_scale
+        dev = max(float(d_to.max()), float(d_from.max())) if np.all(np.isfinite(sub.state)) else math.inf
+        record = {
+            "section": si, "traced": True, "pieces": [p.index for p in sec.section.pieces],
+            "max_deviation_replay_to_figure": float(d_to.max()),
+            "max_deviation_figure_to_replay": float(d_from.max()),
+            "start_speed": speeds[0], "end_speed": speeds[1], "speed_scale": speed_scale,
+            "cusp_speed_limit": cusp_limit,
+            "passed": bool(sec.success and dev <= tol and max(speeds) <= cusp_limit),
+        }
+        drifts = []
+        for p in sec.section.pieces:
+            mp = sub.piece == p.index
+            if np.count_nonzero(mp) < 2:
+                continue
+            if not p.segment.constant:
+                continue  # a spiral: neither p1 + r p2 nor p2 is conserved
+            k = p.segment.coefficients[0]
+            if k != 0.0:
+                # r = xi2 / xi1 in the body frame: the path's radius, negated where the blade runs
+                # backwards (its speed xi2 is then negative while the heading turns the same way)
+                inv = sub.state[0, mp] + p.direction * sub.state[1, mp] / k
+                name = "p1 + r p2"
+            else:
+                inv = sub.state[1, mp]
+                name = "p2"
+            drifts.append({"piece": p.index, "invariant": name, "drift": float(np.ptp(inv)),
+                           "scale": float(np.max(np.abs(inv)) + 1e-300)})
+        out[si] = (record, drifts)
+    return out
+
+
+#: The relative perturbation of the controls by which the replay's conditioning is measured (four
+#: orders of magnitude above double-precision round-off), and the share of the tolerance its spread
+#: may take before the open-loop replay is no longer a sharp enough instrument.
+PERTURBATION = 1e-12
+SPREAD_SHARE = 0.1
+_OPEN_LOOP_KEYS = ("max_deviation_replay_to_figure", "max_deviation_figure_to_replay", "start_speed", "end_speed")
+
+
+def _conditioning(trace: FigureTrace, schedule: ControlSchedule, rep: Replay, sections, records, tol: float) -> dict:
+    """How much the replay of each of ``sections`` moves when the controls move by ``PERTURBATION``.
+
+    The schedule's ``a, b, adot, bdot`` are scaled by ``1 +- PERTURBATION`` and replayed again. The
+    spread of the blade's position (and of the cusp speeds) between the three replays is what the
+    open-loop check cannot resolve: where it reaches ``SPREAD_SHARE`` of the tolerance (or of the
+    cusp-speed limit), the open loop is ill-conditioned for this check.
+    """
+    spread_xy = {si: 0.0 for si in sections}
+    spread_v = {si: 0.0 for si in sections}
+    _, v0, _ = rep.velocities(trace.params)
+    for sign in (1.0, -1.0):
+        f = 1.0 + sign * PERTURBATION
+        other = replay(trace, ControlSchedule(t=schedule.t, a=schedule.a * f, b=schedule.b * f, adot=schedule.adot * f,
+                                              bdot=schedule.bdot * f, section=schedule.section, piece=schedule.piece))
+        if other.t.shape != rep.t.shape:
+            return {si: {"perturbation": PERTURBATION, "ill_conditioned": False} for si in sections}
+        _, v1, _ = other.velocities(trace.params)
+        d = np.hypot(*(other.state[3:5] - rep.state[3:5]))
+        for si in sections:
+            m = np.flatnonzero(rep.section == si)
+            spread_xy[si] = max(spread_xy[si], float(np.max(d[m], initial=0.0)) if np.all(np.isfinite(d[m])) else math.inf)
+            ends = m[[0, -1]]
+            spread_v[si] = max(spread_v[si], float(np.max(np.abs(np.abs(v1[ends]) - np.abs(v0[ends])))))
+    size = trace.figure.size()
+    out = {}
+    for si in sections:
+        r = records[si]
+        out[si] = {
+            "perturbation": PERTURBATION, "position_spread": spread_xy[si],
+            "amplification": spread_xy[si] / (PERTURBATION * size), "cusp_speed_spread": spread_v[si],
+            "ill_conditioned": bool(spread_xy[si] >= SPREAD_SHARE * tol
+                                    or spread_v[si] >= SPREAD_SHARE * r["cusp_speed_limit"]),
+        }
+    return out
+
+
+def _schedule_is_the_trace(trace: FigureTrace, schedule: ControlSchedule, si: int) -> bool:
+    """Whether the schedule's rows of section ``si`` are the traced section's own controls (to 1e-12)."""
+    sec = trace.sections[si]
+    rows = np.flatnonzero(schedule.section == si)
+    if rows.size < 2:
+        return False
+    t = np.clip(schedule.t[rows] - trace.start_times[si], 0.0, sec.duration)
+    got = np.vstack([schedule.a[rows], schedule.b[rows], schedule.adot[rows], schedule.bdot[rows]])
+    close = np.zeros(rows.size, dtype=bool)
+    for side in ("right", "left"):
+        v = sec.evaluate(t, side=side, geometry=False)
+        ref = np.vstack([v["a"], v["b"], v["adot"], v["bdot"]])
+        scale = np.max(np.abs(ref), axis=1, keepdims=True) + 1e-300
+        close |= np.all(np.abs(got - ref) <= 1e-12 * scale, axis=0)
+    return bool(np.all(close))
+
+
+def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dict[int, float]]:
+    """``rep`` with the rows of ``sections`` replaced by the closed loop's: the model under the
+    tracking law about the trace (:func:`skatetrace.feedback.closed_loop.replay_law`). Also the
+    law's largest correction in each.
+
+    Each section starts at rest where the figure places it, as the replay does at a curve's start:
+    where the previous section ended was checked already (within the tolerance of that point, and
+    at rest), and a start error carried over would be corrected by the law and counted against
+    the schedule.
+    """
+    from ..feedback.closed_loop import replay_law
+    from ..feedback.lqr import default_gains, design
+    from ..feedback.reference import section_reference
+
+    params = trace.params
+    state, controls = rep.state.copy(), rep.controls.copy()
+    corrections = {}
+    for si in sections:
+        m = np.flatnonzero(rep.section == si)
+        ref = section_reference(trace.sections[si], params)
+        law = design(ref, params, default_gains(trace.figure.size()))
+        z0 = ref.state_at(0.0)[0][:, 0]
+        t = np.clip(rep.t[m] - trace.start_times[si], 0.0, ref.duration)
+        z, rates, corrections[si], _ = replay_law(ref, law, params, z0, t)
+        state[:, m] = z[:5]
+        controls[:, m] = np.vstack([z[5:7], rates])
+    return Replay(t=rep.t, state=state, controls=controls, section=rep.section, piece=rep.piece), corrections
+
+
 def check_rel_tol(rel_tol) -> None:
     """Refuse a verification tolerance that is not a number in (0, 1]: ``deviation > NaN`` is False,
     so a NaN tolerance would pass every check."""
@@ -381,82 +556,51 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     size = trace.figure.size()
     tol = rel_tol * size
     rep = replay(trace, schedule)
-    bad_cusps = []
-    xi1, xi2, _ = rep.velocities(params)
-    sections, drifts, cusp_speeds = [], [], []
+    measured = _measure(trace, rep, tol)
+    conditioning = {}
+    failing = [si for si, (r, _) in measured.items() if r["traced"] and not r["passed"] and trace.sections[si].success]
+    if failing and np.all(np.isfinite(rep.state)):
+        conditioning = _conditioning(trace, schedule, rep, failing, {si: measured[si][0] for si in failing}, tol)
+        # the closed loop follows the trace's own motion: it stands in only for the trace's own schedule
+        ill = [si for si in failing if conditioning[si]["ill_conditioned"] and _schedule_is_the_trace(trace, schedule, si)]
+        if ill:
+            closed, corrections = _closed_loop(trace, rep, ill)
+            again = _measure(trace, closed, tol, only=ill)
+            for si in ill:
+                record, drifts = again[si]
+                record["open_loop"] = {k: measured[si][0][k] for k in _OPEN_LOOP_KEYS}
+                record["max_correction"] = corrections[si]
+                record["instrument"] = "closed loop"
+                # the closed loop stands for the schedule only if the law barely departed from it
+                record["passed"] = bool(record["passed"] and corrections[si] <= rel_tol)
+                measured[si] = (record, drifts)
+    sections, drifts, cusp_speeds, bad_cusps, problems = [], [], [], [], []
     dev_to, dev_from = 0.0, 0.0
-    # each section's rows, found once (not with a mask over the whole replay per section)
-    total_length = sum(p.segment.length for sec in trace.sections for p in sec.section.pieces)
-    density = min(200.0, MAX_FIGURE_SAMPLES / max(total_length, 1e-300))  # target points per unit length
-    order = np.argsort(rep.section, kind="stable")
-    cuts = np.searchsorted(rep.section[order], np.arange(len(trace.sections) + 1))
-    for si, sec in enumerate(trace.sections):
-        idx = order[cuts[si]:cuts[si + 1]]
-        if not sec.phases or not idx.size:
-            sections.append({"section": si, "traced": False, "passed": False, "message": sec.message})
+    for si in range(len(trace.sections)):
+        record, d = measured[si]
+        if record["traced"]:
+            record.setdefault("instrument", "open loop")
+        if si in conditioning:
+            record["conditioning"] = conditioning[si]
+        if record.get("max_correction", 0.0) > rel_tol:
+            problems.append(f"section {si}: the closed loop departed from the schedule by {record['max_correction']:.3g} "
+                            f"of its fastest rate (limit {rel_tol:g}), so it does not vouch for it")
+        sections.append(record)
+        drifts.extend(d)
+        if not record["traced"]:
             continue
-        sub = rep.take(idx)
-        sxi1, sxi2 = xi1[idx], xi2[idx]
-        pts = sub.state[3:5]
-        # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
-        samples = [segment_points(p.start, p.segment, 65) for p in sec.section.pieces]
-        d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0]
-        d_from = np.zeros(0)
-        for p, xy in zip(sec.section.pieces, samples):
-            d_to = _nearer(d_to, pts, p, xy)
-            n = max(64, int(p.segment.length * density))
-            # Each piece's points are matched with the stretch of replay labelled with that piece
-            # (one sample more each side): where two pieces pass close to each other, as at the
-            # waist of a figure eight, the nearest sample may otherwise belong to the other one.
-            own = np.flatnonzero(sub.piece == p.index)
-            mp = np.zeros(idx.size, dtype=bool)
-            if own.size:
-                mp[max(own[0] - 1, 0):own[-1] + 2] = True
-            else:
-                mp[:] = True
-            d_from = np.concatenate([d_from, _figure_to_replay(segment_points(p.start, p.segment, n), sub, mp, params)])
-        speeds = (abs(float(sxi2[0])), abs(float(sxi2[-1])))
+        speeds = (record["start_speed"], record["end_speed"])
         cusp_speeds.extend(speeds)
-        # "At rest" means below 1e-8 of the fastest motion in the section (the glide, the blade, or
-        # the mass relative to the ice): the replay resolves speeds to a fraction of that scale.
-        a, b, ad, bd = sub.controls
-        mass_speed = np.hypot(sxi2 - sxi1 * b + ad, sxi1 * a + bd)
-        speed_scale = max(trace.options.speed, float(np.max(np.abs(sxi2))), float(np.max(mass_speed)))
-        cusp_limit = 1e-8 * speed_scale
-        if max(speeds) > cusp_limit:
-            bad_cusps.append(f"section {si}: {max(speeds):.3g} > {cusp_limit:.3g}")
-        sections.append({
-            "section": si, "traced": True, "pieces": [p.index for p in sec.section.pieces],
-            "max_deviation_replay_to_figure": float(d_to.max()),
-            "max_deviation_figure_to_replay": float(d_from.max()),
-            "start_speed": speeds[0], "end_speed": speeds[1], "speed_scale": speed_scale,
-            "cusp_speed_limit": cusp_limit,
-            "passed": bool(sec.success and max(float(d_to.max()), float(d_from.max())) <= tol
-                           and max(speeds) <= cusp_limit),
-        })
-        dev_to, dev_from = max(dev_to, float(d_to.max())), max(dev_from, float(d_from.max()))
-        for p in sec.section.pieces:
-            mp = sub.piece == p.index
-            if np.count_nonzero(mp) < 2:
-                continue
-            if not p.segment.constant:
-                continue  # a spiral: neither p1 + r p2 nor p2 is conserved
-            k = p.segment.coefficients[0]
-            if k != 0.0:
-                inv = sub.state[0, mp] + sub.state[1, mp] / k
-                name = "p1 + r p2"
-            else:
-                inv = sub.state[1, mp]
-                name = "p2"
-            drifts.append({"piece": p.index, "invariant": name, "drift": float(np.ptp(inv)),
-                           "scale": float(np.max(np.abs(inv)) + 1e-300)})
+        if max(speeds) > record["cusp_speed_limit"]:
+            bad_cusps.append(f"section {si}: {max(speeds):.3g} > {record['cusp_speed_limit']:.3g}")
+        dev_to = max(dev_to, record["max_deviation_replay_to_figure"])
+        dev_from = max(dev_from, record["max_deviation_figure_to_replay"])
     max_dev = max(dev_to, dev_from)
     if not np.all(np.isfinite(rep.state)):
         max_dev = math.inf  # the replay broke down somewhere: never let NaN pass a comparison
     max_cusp = max(cusp_speeds) if cusp_speeds else 0.0
-    problems = []
     if not trace.success:
-        problems.append(trace.message)
+        problems.insert(0, trace.message)
     if max_dev > tol:
         problems.append(f"deviation {max_dev:.3g} exceeds {tol:.3g} ({rel_tol:g} x figure size {size:.4g})")
     if bad_cusps:
