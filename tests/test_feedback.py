@@ -118,3 +118,11 @@ def test_a_late_controller_acts_on_the_state_it_saw(two_arcs):
     late = run_loop(refs[:1], Plant(**base, delay=0.01), laws[:1], steps=1000)
     a, b = prompt.sections[0]["state"][3:5, -1, 0], late.sections[0]["state"][3:5, -1, 0]
     assert np.all(np.isfinite(b)) and np.hypot(*(a - b)) > 1e-9
+
+
+def test_a_riccati_solve_that_cannot_finish_is_returned_as_data(two_arcs):
+    fig, trace, refs, _ = two_arcs
+    law = design(refs[0], trace.params, default_gains(fig.size()), max_nfev=1)
+    assert not law.success
+    assert "Riccati" in law.message
+    assert np.all(law.K == 0.0)

@@ -183,8 +183,12 @@ def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw 
     return LoopRun(sections=tuple(out), closed=laws is not None)
 
 
+class _Budget(Exception):
+    """The closed-loop replay used up its evaluations."""
+
+
 def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out, *, rtol: float = 1e-12,
-               atol: float = 1e-14):
+               atol: float = 1e-14, max_nfev: int = 300_000):
     """One sleigh (the model itself) under the law, integrated accurately: DOP853 between the rate jumps.
 
     Parameters
@@ -195,6 +199,9 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
         Section times (non-decreasing, within the section) at which to report.
     rtol, atol : float
         DOP853's tolerances; ``atol`` is relative to each variable's largest value on the reference.
+    max_nfev : int
+        Budget of evaluations of the law (a few per microsecond of work each); beyond it the
+        replay stops and reports ``success=False``.
 
     Returns
     -------
@@ -214,7 +221,12 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
     cuts = np.concatenate([[grid[0]], grid[1:][np.diff(grid) == 0.0], [grid[-1]]])
     scale = np.maximum(np.max(np.abs(ref.z), axis=1), 1e-300) * atol
 
+    count = [0]
+
     def f(t, z):
+        count[0] += 1
+        if count[0] > max_nfev:
+            raise _Budget
         ad, bd = law.rates(t, z[:, None])
         return rhs(params, z[:, None], ad, bd)[:, 0]
 
@@ -225,7 +237,11 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
         inside = (t_out >= c0) & ((t_out < c1) | (c1 == cuts[-1]) & (t_out <= c1))
         if c1 > c0:
             # a jump of the rates at c0: the law is read from the right there (just inside the chunk)
-            sol = solve_ivp(f, (c0, c1), z, method="DOP853", rtol=rtol, atol=scale, dense_output=True)
+            try:
+                sol = solve_ivp(f, (c0, c1), z, method="DOP853", rtol=rtol, atol=scale, dense_output=True)
+            except _Budget:
+                ok = False
+                break
             if not sol.success or not np.all(np.isfinite(sol.y[:, -1])):
                 ok = False
                 break

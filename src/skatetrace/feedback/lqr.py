@@ -123,11 +123,17 @@ def _jacobians(p: SleighParams, z: np.ndarray, u: np.ndarray):
 
 @dataclass(frozen=True, slots=True, eq=False)
 class TrackingLaw:
-    """The regulator of one section: gains ``K`` (k, 2, 7) at the reference's times ``t`` (k,)."""
+    """The regulator of one section: gains ``K`` (k, 2, 7) at the reference's times ``t`` (k,).
+
+    ``success`` is False (and ``message`` says why) where the Riccati equation could not be
+    solved; ``K`` is then zero, the open loop: check ``success`` before relying on the law.
+    """
 
     reference: Reference
     t: np.ndarray
     K: np.ndarray
+    success: bool = True
+    message: str = "gains designed"
 
     def rates(self, tau, z: np.ndarray, measured_at=None) -> tuple[np.ndarray, np.ndarray]:
         """Mass rates at section time ``tau`` for states ``z`` (7, n) measured at ``measured_at``
@@ -154,8 +160,17 @@ class TrackingLaw:
         return (1 - w)[:, None, None] * self.K[j] + w[:, None, None] * self.K[j + 1]
 
 
-def design(ref: Reference, params: SleighParams, gains: TrackingGains) -> TrackingLaw:
-    """Solve the section's Riccati equation backwards over the reference's rows."""
+class _Stop(Exception):
+    """The Riccati integration left the finite numbers or its budget."""
+
+
+def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nfev: int = 200_000) -> TrackingLaw:
+    """Solve the section's Riccati equation backwards over the reference's rows.
+
+    Never raises for a numerical failure: a Riccati solution that overflows (a reference at the
+    limits of floating point, say a figure a micrometre across) or needs more than ``max_nfev``
+    evaluations is returned as a law with ``success=False``.
+    """
     from scipy.integrate import solve_ivp
 
     t = ref.grid
@@ -179,7 +194,12 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains) -> Tracki
         w = (tt - t[j]) / h if h > 0 else 0.0
         return (1 - w) * As[j] + w * As[j + 1], (1 - w) * Bs[j] + w * Bs[j + 1]
 
+    count = [0]
+
     def riccati(tt, pv):
+        count[0] += 1
+        if count[0] > max_nfev or not np.all(np.isfinite(pv)):
+            raise _Stop
         P = pv.reshape(7, 7)
         Aj, Bj = coeffs(tt)
         PB = P @ Bj
@@ -187,11 +207,23 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains) -> Tracki
         return dP.ravel()
 
     T = float(t[-1])
-    sol = solve_ivp(riccati, (T, float(t[0])), np.eye(7).ravel(), method="LSODA", rtol=1e-6, atol=1e-9,
-                    dense_output=True)
+    failed = TrackingLaw(reference=ref, t=t, K=np.zeros((t.size, 2, 7)), success=False,
+                         message="the Riccati equation could not be solved over the section")
+    if not (np.all(np.isfinite(As)) and np.all(np.isfinite(Bs)) and np.all(np.isfinite(Rinv))):
+        return failed
+    try:
+        with np.errstate(all="ignore"):
+            sol = solve_ivp(riccati, (T, float(t[0])), np.eye(7).ravel(), method="LSODA", rtol=1e-6, atol=1e-9,
+                            dense_output=True)
+    except _Stop:
+        return failed
+    if not sol.success:
+        return failed
     Ps = sol.sol(t).T.reshape(-1, 7, 7)
     Ps = 0.5 * (Ps + np.transpose(Ps, (0, 2, 1)))
     # K (in the original coordinates) = R^-1 B^T P_original, with P_original = S^-1 P_scaled S^-1
     Ks = Rinv[None, :, None] * np.einsum("kji,kjl->kil", Bs, Ps)
     K = Ks * (1 / s)[None, None, :]
+    if not np.all(np.isfinite(K)):
+        return failed
     return TrackingLaw(reference=ref, t=t, K=K)

@@ -482,6 +482,18 @@ def _conditioning(trace: FigureTrace, schedule: ControlSchedule, rep: Replay, se
     return out
 
 
+#: The closed loop's reference is sampled at 20,000 times per section; beyond this many turns of
+#: the heading in a section it no longer resolves the motion, and the open loop's verdict stands.
+MAX_CLOSED_LOOP_TURNS = 20.0
+
+
+def _closed_loop_resolves(trace: FigureTrace, si: int) -> bool:
+    """Whether section ``si`` is short enough in turning for the closed loop's reference."""
+    turning = sum(p.segment.length * float(np.max(np.abs(p.segment.curvature_at(np.linspace(0.0, p.segment.length, 33)))))
+                  for p in trace.sections[si].section.pieces)
+    return turning <= MAX_CLOSED_LOOP_TURNS * 2 * math.pi
+
+
 def _schedule_is_the_trace(trace: FigureTrace, schedule: ControlSchedule, si: int) -> bool:
     """Whether the schedule's rows of section ``si`` are the traced section's own controls (to 1e-12)."""
     sec = trace.sections[si]
@@ -502,7 +514,8 @@ def _schedule_is_the_trace(trace: FigureTrace, schedule: ControlSchedule, si: in
 def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dict[int, float]]:
     """``rep`` with the rows of ``sections`` replaced by the closed loop's: the model under the
     tracking law about the trace (:func:`skatetrace.feedback.closed_loop.replay_law`). Also the
-    law's largest correction in each.
+    law's largest correction in each (a section whose law could not be designed or whose closed
+    loop could not be integrated is left out, and keeps the open loop's rows and verdict).
 
     Each section starts at rest where the figure places it, as the replay does at a curve's start:
     where the previous section ended was checked already (within the tolerance of that point, and
@@ -520,9 +533,14 @@ def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dic
         m = np.flatnonzero(rep.section == si)
         ref = section_reference(trace.sections[si], params)
         law = design(ref, params, default_gains(trace.figure.size()))
+        if not law.success:
+            continue
         z0 = ref.state_at(0.0)[0][:, 0]
         t = np.clip(rep.t[m] - trace.start_times[si], 0.0, ref.duration)
-        z, rates, corrections[si], _ = replay_law(ref, law, params, z0, t)
+        z, rates, correction, ok = replay_law(ref, law, params, z0, t)
+        if not ok:
+            continue  # no closed-loop verdict: the open loop's stands
+        corrections[si] = correction
         state[:, m] = z[:5]
         controls[:, m] = np.vstack([z[5:7], rates])
     return Replay(t=rep.t, state=state, controls=controls, section=rep.section, piece=rep.piece), corrections
@@ -552,7 +570,6 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     check_rel_tol(rel_tol)
     if schedule is None:
         schedule, _ = schedule_from_trace(trace)
-    params = trace.params
     size = trace.figure.size()
     tol = rel_tol * size
     rep = replay(trace, schedule)
@@ -562,9 +579,11 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     if failing and np.all(np.isfinite(rep.state)):
         conditioning = _conditioning(trace, schedule, rep, failing, {si: measured[si][0] for si in failing}, tol)
         # the closed loop follows the trace's own motion: it stands in only for the trace's own schedule
-        ill = [si for si in failing if conditioning[si]["ill_conditioned"] and _schedule_is_the_trace(trace, schedule, si)]
+        ill = [si for si in failing if conditioning[si]["ill_conditioned"] and _closed_loop_resolves(trace, si)
+               and _schedule_is_the_trace(trace, schedule, si)]
         if ill:
             closed, corrections = _closed_loop(trace, rep, ill)
+            ill = list(corrections)
             again = _measure(trace, closed, tol, only=ill)
             for si in ill:
                 record, drifts = again[si]
