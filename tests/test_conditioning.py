@@ -86,3 +86,15 @@ def test_the_arc_invariant_holds_on_pieces_skated_backwards(arcs):
     drifts = {d["piece"]: d["drift"] / d["scale"] for d in report.invariant_drift}
     assert backwards & set(drifts)
     assert max(drifts.values()) <= 1e-6
+
+
+def test_round_off_of_the_rows_still_counts_as_the_trace_own_schedule(arcs):
+    """Rows written at absolute times come back with the section's start rounded off: a relative
+    change of 1e-11 is still the trace's schedule, one of 1e-7 is not."""
+    from skatetrace.verification.verify import _schedule_is_the_trace
+
+    trace, schedule, _ = arcs
+    for f, same in ((1.0 + 1e-11, True), (1.0 + 1e-7, False)):
+        g = np.where(schedule.section == 2, f, 1.0)
+        other = dataclasses.replace(schedule, adot=schedule.adot * g, bdot=schedule.bdot * g)
+        assert _schedule_is_the_trace(trace, other, 2) is same

@@ -482,6 +482,9 @@ def _conditioning(trace: FigureTrace, schedule: ControlSchedule, rep: Replay, se
     return out
 
 
+#: How close (relative) a schedule's rows must be to the traced section's controls for the closed
+#: loop about that section to vouch for them.
+SAME_SCHEDULE = 1e-9
 #: The closed loop's reference is sampled at 20,000 times per section; beyond this many turns of
 #: the heading in a section it no longer resolves the motion, and the open loop's verdict stands.
 MAX_CLOSED_LOOP_TURNS = 20.0
@@ -495,7 +498,12 @@ def _closed_loop_resolves(trace: FigureTrace, si: int) -> bool:
 
 
 def _schedule_is_the_trace(trace: FigureTrace, schedule: ControlSchedule, si: int) -> bool:
-    """Whether the schedule's rows of section ``si`` are the traced section's own controls (to 1e-12)."""
+    """Whether the schedule's rows of section ``si`` are the traced section's own controls.
+
+    To ``SAME_SCHEDULE`` of each control's largest value: the rows' times are absolute, and taking
+    the section's start off again rounds them, which moves a planned section's fast rates at its
+    rests by about 1e-12 of their scale.
+    """
     sec = trace.sections[si]
     rows = np.flatnonzero(schedule.section == si)
     if rows.size < 2:
@@ -507,7 +515,7 @@ def _schedule_is_the_trace(trace: FigureTrace, schedule: ControlSchedule, si: in
         v = sec.evaluate(t, side=side, geometry=False)
         ref = np.vstack([v["a"], v["b"], v["adot"], v["bdot"]])
         scale = np.max(np.abs(ref), axis=1, keepdims=True) + 1e-300
-        close |= np.all(np.abs(got - ref) <= 1e-12 * scale, axis=0)
+        close |= np.all(np.abs(got - ref) <= SAME_SCHEDULE * scale, axis=0)
     return bool(np.all(close))
 
 
