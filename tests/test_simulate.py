@@ -3,6 +3,8 @@ import math
 import numpy as np
 import pytest
 
+import skatetrace as st
+
 from skatetrace import SleighParams, pattern, trace_figure
 from skatetrace.dynamics.controls import ControlSchedule
 from skatetrace.dynamics.model import mass_energy, skate_energy, velocities
@@ -82,3 +84,24 @@ def test_written_schedule_meets_the_hermite_tolerance():
         worst_rate = max(worst_rate, np.max(np.abs(ad - v["adot"])), np.max(np.abs(bd - v["bdot"])))
     assert worst_value <= 1e-9
     assert worst_rate <= 1e-7
+
+
+def test_a_controller_that_ignores_the_state_is_the_open_loop():
+    """State feedback that returns the rates of a known mass motion moves the sleigh exactly as
+    that motion given as controls does (the mass integrated from its rates)."""
+    p = st.SleighParams()
+    a0, b0, ra, rb = 0.3, -0.2, 0.1, 0.05
+    open_loop = st.simulate(p, [0.2, 1.0, 0.0, 0.0, 0.0],
+                            lambda t: (a0 + ra * t, b0 + rb * t, ra, rb), (0.0, 2.0))
+    feedback = st.simulate(p, [0.2, 1.0, 0.0, 0.0, 0.0, a0, b0], st.Controller(lambda t, z: (ra, rb)), (0.0, 2.0))
+    assert open_loop.success and feedback.success
+    assert feedback.state.shape[0] == 7
+    np.testing.assert_allclose(feedback(2.0)[:5, 0], open_loop(2.0)[:, 0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(feedback(2.0)[5:, 0], [a0 + 2 * ra, b0 + 2 * rb], rtol=0, atol=1e-12)
+
+
+def test_a_controller_needs_the_mass_in_the_state():
+    with pytest.raises(ValueError, match="7 finite numbers"):
+        st.simulate(st.SleighParams(), [0.0, 1.0, 0.0, 0.0, 0.0], st.Controller(lambda t, z: (0.0, 0.0)), (0.0, 1.0))
+    with pytest.raises(ValueError, match="t_span is required"):
+        st.simulate(st.SleighParams(), [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0], st.Controller(lambda t, z: (0.0, 0.0)))

@@ -8,7 +8,7 @@ named like their modules; they are bound at import so that the name always means
 
 from importlib import import_module
 
-from .dynamics.simulate import Trajectory, simulate  # noqa: F401 (re-exported)
+from .dynamics.simulate import Controller, Trajectory, simulate  # noqa: F401 (re-exported)
 from .verification.verify import VerificationReport, schedule_from_trace, verify  # noqa: F401 (re-exported)
 
 _EXPORTS = {
@@ -40,7 +40,7 @@ _EXPORTS = {
 }
 _MODULE_OF = {name: module for module, names in _EXPORTS.items() for name in names}
 
-__all__ = sorted([*_MODULE_OF, "Trajectory", "simulate", "VerificationReport", "schedule_from_trace", "verify"])
+__all__ = sorted([*_MODULE_OF, "Controller", "Trajectory", "simulate", "VerificationReport", "schedule_from_trace", "verify"])
 __version__ = "0.1.0"
 
 

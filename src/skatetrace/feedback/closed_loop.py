@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..dynamics.model import SleighParams, body_velocities, momenta
+from ..dynamics.simulate import simulate
 from .lqr import TrackingLaw
 from .reference import Reference, rhs
 
@@ -183,10 +184,6 @@ def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw 
     return LoopRun(sections=tuple(out), closed=laws is not None)
 
 
-class _Budget(Exception):
-    """The closed-loop replay used up its evaluations."""
-
-
 def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out, *, rtol: float = 1e-12,
                atol: float = 1e-14, max_nfev: int = 300_000):
     """One sleigh (the model itself) under the law, integrated accurately: DOP853 between the rate jumps.
@@ -200,8 +197,8 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
     rtol, atol : float
         DOP853's tolerances; ``atol`` is relative to each variable's largest value on the reference.
     max_nfev : int
-        Budget of evaluations of the law (a few per microsecond of work each); beyond it the
-        replay stops and reports ``success=False``.
+        Budget of evaluations of the law over the whole section; beyond it the replay stops and
+        reports ``success=False``.
 
     Returns
     -------
@@ -214,40 +211,27 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
     success : bool
         False if an integration failed (the states from there on are NaN).
     """
-    from scipy.integrate import solve_ivp
-
     t_out = np.asarray(t_out, dtype=float)
     grid = ref.grid
     cuts = np.concatenate([[grid[0]], grid[1:][np.diff(grid) == 0.0], [grid[-1]]])
     scale = np.maximum(np.max(np.abs(ref.z), axis=1), 1e-300) * atol
-
-    count = [0]
-
-    def f(t, z):
-        count[0] += 1
-        if count[0] > max_nfev:
-            raise _Budget
-        ad, bd = law.rates(t, z[:, None])
-        return rhs(params, z[:, None], ad, bd)[:, 0]
-
+    controller = law.controller()
     states = np.full((7, t_out.size), np.nan)
     z = np.asarray(z0, dtype=float)
     ok = True
+    budget = max_nfev
     for c0, c1 in zip(cuts[:-1], cuts[1:]):
         inside = (t_out >= c0) & ((t_out < c1) | (c1 == cuts[-1]) & (t_out <= c1))
         if c1 > c0:
             # a jump of the rates at c0: the law is read from the right there (just inside the chunk)
-            try:
-                sol = solve_ivp(f, (c0, c1), z, method="DOP853", rtol=rtol, atol=scale, dense_output=True)
-            except _Budget:
-                ok = False
-                break
-            if not sol.success or not np.all(np.isfinite(sol.y[:, -1])):
+            run = simulate(params, z, controller, (c0, c1), rtol=rtol, atol=scale, max_nfev=budget)
+            budget -= run.nfev
+            if not run.success:
                 ok = False
                 break
             if np.any(inside):
-                states[:, inside] = sol.sol(t_out[inside])
-            z = sol.y[:, -1]
+                states[:, inside] = run(t_out[inside])
+            z = run.state[:, -1]
         elif np.any(inside):
             states[:, inside] = z[:, None]
     ur = ref.state_at(t_out)[1]

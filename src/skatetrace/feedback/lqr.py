@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..dynamics.model import SleighParams
+from ..dynamics.simulate import Controller
 from .reference import Reference, rhs
 
 __all__ = ["TrackingGains", "TrackingLaw", "default_gains", "design"]
@@ -149,6 +150,19 @@ class TrackingLaw:
         dz[2] = (dz[2] + np.pi) % (2 * np.pi) - np.pi
         du = np.einsum("nij,jn->in", self.gain(tm, n), dz)
         return ur[0] - du[0], ur[1] - du[1]
+
+    def controller(self, start: float = 0.0) -> Controller:
+        """This law as state feedback for :func:`skatetrace.simulate`, the section starting at ``start``.
+
+        The schedule's rates jump at the section's breakpoints (the repeated times of
+        ``reference.grid``); integrate between them for full accuracy, as
+        :func:`~skatetrace.feedback.closed_loop.replay_law` does.
+        """
+        def rates(t, z):
+            ad, bd = self.rates(t - start, np.asarray(z, dtype=float)[:, None])
+            return float(ad[0]), float(bd[0])
+
+        return Controller(rates)
 
     def gain(self, tau, n: int = 1) -> np.ndarray:
         """``K`` at section times ``tau`` (linear between the rows), shape ``(n, 2, 7)``."""
