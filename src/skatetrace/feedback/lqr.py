@@ -37,13 +37,17 @@ Limits (measured, work in progress for issue 16)
 ------------------------------------------------
 - On the trace it reproduces the exact motion: the circle eight (1.7 m skater) stays within
   1.7e-9 of its size in a nominal closed-loop run (the open-loop schedule on the same integrator:
-  1.7e-7), with rests at 1.7e-8 m/s. The rests of the two arcs of ``tests/test_feedback.py``
-  (model units) are reached only to about 1e-6 of the speed.
-- Its reference is indexed by time. Under +-1 % parameter error the circle eight strays up to
-  3.4e-3 of its size (open loop: metres); at +-5 % some trials diverge, because a sleigh that is
-  faster or slower than the model falls behind or ahead of the clock, and pulling it back along
-  the figure needs rates far outside the linearisation. A reference indexed by progress along the
-  figure is the next step.
+  1.7e-7), with rests at 1.7e-8 m/s. This is what verification relies on where the open-loop
+  replay is ill-conditioned: there the law corrects the schedule by 1e-11 to 1e-9 of its rates.
+- It does not yet hold a sleigh whose parameters differ from the model's. Under +-1 % error the
+  unplanned circle eight strays up to 3.4e-3 of its size (open loop: metres); the circle eight
+  planned within 0.5 m diverges in 3 of 8 trials, and at +-5 % most trials diverge. The law holds
+  the blade within about a centimetre through a section and breaks in the last half second of the
+  stop into a cusp: the blade comes to rest early, reverses, and the mass rates the law commands
+  grow without bound. (A guess, not checked: near rest the pose can be corrected only by
+  swinging the mass, far outside where the linearisation holds.) A reference indexed by progress along the figure, momenta measured through the model's
+  parameters, saturated corrections, pose weights faded with the speed, and ending a section
+  when the blade stops were each tried and were not enough.
 """
 
 from __future__ import annotations
