@@ -146,3 +146,16 @@ def test_the_law_as_a_controller_of_simulate_holds_the_section(two_arcs):
             z = run.state[:, -1]
     end, _ = ref.state_at(ref.duration)
     assert np.hypot(*(z[3:5] - end[3:5, 0])) <= 1e-7 * fig.size()
+
+
+def test_a_coarse_reference_is_refined_until_it_holds_the_exact_motion(two_arcs):
+    fig, trace, _, _ = two_arcs
+    sec = trace.sections[0]
+    ref = section_reference(sec, trace.params, points=50, tol=1e-9)
+    assert ref.grid.size > 200  # 50 points did not hold it: refined (by fours)
+    t = np.linspace(0.0, sec.duration, 1001)[1:-1] * (1 - 1e-9)
+    exact = sec.evaluate(t)
+    z, _ = ref.state_at(t)
+    for i, k in enumerate(("p1", "p2", "theta", "x", "y", "a", "b")):
+        # the check is at the middle of the intervals, where cubic interpolation errs most
+        assert np.max(np.abs(z[i] - exact[k])) <= 2e-9 * np.max(np.abs(ref.z[i])), k

@@ -19,6 +19,8 @@ from ..figures.figure import Join, Section
 
 __all__ = ["Reference", "references", "rhs", "section_reference"]
 
+_STATE = ("p1", "p2", "theta", "x", "y", "a", "b")
+
 
 def rhs(params, z, ad, bd):
     """``dz/dt`` of ``z = (p1, p2, theta, x, y, a, b)`` (rows) under mass rates ``ad, bd``.
@@ -96,26 +98,42 @@ def references(sections: list[Section], schedule: ControlSchedule, states: dict[
     return out
 
 
-def section_reference(sec, params: SleighParams, *, points: int = 20_000) -> Reference:
+def section_reference(sec, params: SleighParams, *, points: int = 20_000, tol: float = 1e-9,
+                      max_points: int = 1_280_000) -> Reference:
     """A :class:`Reference` sampled from a traced section itself (the exact motion at any time).
 
     ``points`` times spread evenly over the section, and both sides of every breakpoint (where the
-    rates jump): fine enough that the interpolated state stays within about 1e-10 of the figure's
-    size of the exact motion, far finer than the rows of ``controls.csv``.
+    rates jump), four times as many until the interpolated state is within ``tol`` of the exact
+    motion (relative to each variable's largest value) at the middle of every interval, or
+    ``max_points`` is reached. Far finer than the rows of ``controls.csv``: a tracking law about a
+    coarser reference corrects its interpolation error (measured: 1.8e-6 of the rates on a section
+    of eight pieces at 20,000 points, 2.6e-8 at 80,000).
     """
     bps = sec.breakpoints()
     T = float(bps[-1])
-    t = np.union1d(np.linspace(0.0, T, points), bps)
-    right = sec.evaluate(t)
     inner = bps[1:-1]
-    if inner.size:
-        left = sec.evaluate(inner, side="left")
-        idx = np.searchsorted(t, inner)
-        t = np.insert(t, idx, inner)
-        right = {k: np.insert(right[k], idx, left[k]) for k in right}
-    z = np.vstack([right[k] for k in ("p1", "p2", "theta", "x", "y", "a", "b")])
-    zdot = rhs(params, z, right["adot"], right["bdot"])
-    pieces = np.array([p.index for p in sec.section.pieces])[right["segment"]]
-    first = sec.section.pieces[0]
-    return Reference(grid=t, z=z, zdot=zdot, piece=pieces, join=first.join_before,
-                     curve_start=first.join_before is None)
+    while True:
+        t = np.union1d(np.linspace(0.0, T, points), bps)
+        right = sec.evaluate(t)
+        if inner.size:
+            left = sec.evaluate(inner, side="left")
+            idx = np.searchsorted(t, inner)
+            t = np.insert(t, idx, inner)
+            right = {k: np.insert(right[k], idx, left[k]) for k in right}
+        z = np.vstack([right[k] for k in _STATE])
+        zdot = rhs(params, z, right["adot"], right["bdot"])
+        pieces = np.array([p.index for p in sec.section.pieces])[right["segment"]]
+        first = sec.section.pieces[0]
+        ref = Reference(grid=t, z=z, zdot=zdot, piece=pieces, join=first.join_before,
+                        curve_start=first.join_before is None)
+        if points >= max_points:
+            return ref
+        h = np.diff(t)
+        mid = (t[:-1] + 0.5 * h)[h > 0]
+        exact = sec.evaluate(mid)
+        got, _ = ref.state_at(mid)
+        scale = np.maximum(np.max(np.abs(z), axis=1), 1e-300)
+        err = max(float(np.max(np.abs(got[i] - exact[k]))) / scale[i] for i, k in enumerate(_STATE))
+        if err <= tol:
+            return ref
+        points *= 4
