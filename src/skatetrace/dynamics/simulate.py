@@ -71,30 +71,24 @@ class _Exhausted(Exception):
         self.t = t
 
 
-def _rhs(params: SleighParams, controls: ControlFn, budget: list):
+def _rhs(params: SleighParams, controls: ControlFn | Controller, budget: list):
+    """``f(t, y)`` for solve_ivp: the five equations under ``controls(t)``, or the seven (the mass
+    moving at the rates a :class:`Controller` returns) under state feedback."""
     m = params.m
+    feedback = isinstance(controls, Controller)
 
     def f(t, y):
         budget[0] -= 1
         if budget[0] < 0:
             raise _Exhausted(t)
-        a, b, ad, bd = controls(t)
+        if feedback:
+            a, b = y[5], y[6]
+            ad, bd = controls.rates(t, y)
+        else:
+            a, b, ad, bd = controls(t)
         xi1, xi2, eta = velocities(params, y[0], y[1], a, b, ad, bd)
-        return [-m * eta * xi2, m * eta * xi1, xi1, xi2 * math.cos(y[2]), xi2 * math.sin(y[2])]
-
-    return f
-
-
-def _feedback_rhs(params: SleighParams, controller: Controller, budget: list):
-    m = params.m
-
-    def f(t, y):
-        budget[0] -= 1
-        if budget[0] < 0:
-            raise _Exhausted(t)
-        ad, bd = controller.rates(t, y)
-        xi1, xi2, eta = velocities(params, y[0], y[1], y[5], y[6], ad, bd)
-        return [-m * eta * xi2, m * eta * xi1, xi1, xi2 * math.cos(y[2]), xi2 * math.sin(y[2]), ad, bd]
+        dy = [-m * eta * xi2, m * eta * xi1, xi1, xi2 * math.cos(y[2]), xi2 * math.sin(y[2])]
+        return dy + [ad, bd] if feedback else dy
 
     return f
 
@@ -171,8 +165,8 @@ def simulate(
     budget = [int(max_nfev)]
     for t0, t1, fn in chunks:
         try:
-            rhs = _feedback_rhs(params, fn, budget) if feedback else _rhs(params, fn, budget)
-            sol = solve_ivp(rhs, (t0, t1), y, method=method, rtol=rtol, atol=atol, dense_output=True)
+            sol = solve_ivp(_rhs(params, fn, budget), (t0, t1), y, method=method, rtol=rtol, atol=atol,
+                            dense_output=True)
         except _Exhausted as exc:
             return Trajectory(success=False, status=-2, message=(
                 f"integration failed near t = {exc.t:.6g}: more than {max_nfev} evaluations (the controls "
