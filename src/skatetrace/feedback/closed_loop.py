@@ -212,28 +212,24 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
         False if an integration failed (the states from there on are NaN).
     """
     t_out = np.asarray(t_out, dtype=float)
-    grid = ref.grid
-    cuts = np.concatenate([[grid[0]], grid[1:][np.diff(grid) == 0.0], [grid[-1]]])
+    end = ref.duration
     scale = np.maximum(np.max(np.abs(ref.z), axis=1), 1e-300) * atol
     controller = law.controller()
     states = np.full((7, t_out.size), np.nan)
     z = np.asarray(z0, dtype=float)
     ok = True
     budget = max_nfev
-    for c0, c1 in zip(cuts[:-1], cuts[1:]):
-        inside = (t_out >= c0) & ((t_out < c1) | (c1 == cuts[-1]) & (t_out <= c1))
-        if c1 > c0:
-            # a jump of the rates at c0: the law is read from the right there (just inside the chunk)
-            run = simulate(params, z, controller, (c0, c1), rtol=rtol, atol=scale, max_nfev=budget)
-            budget -= run.nfev
-            if not run.success:
-                ok = False
-                break
-            if np.any(inside):
-                states[:, inside] = run(t_out[inside])
-            z = run.state[:, -1]
-        elif np.any(inside):
-            states[:, inside] = z[:, None]
+    for c0, c1 in ref.spans():
+        # a jump of the rates at c0: the law is read from the right there (just inside the span)
+        run = simulate(params, z, controller, (c0, c1), rtol=rtol, atol=scale, max_nfev=budget)
+        budget -= run.nfev
+        if not run.success:
+            ok = False
+            break
+        inside = (t_out >= c0) & ((t_out < c1) | (c1 == end) & (t_out <= c1))
+        if np.any(inside):
+            states[:, inside] = run(t_out[inside])
+        z = run.state[:, -1]
     ur = ref.state_at(t_out)[1]
     finite = np.all(np.isfinite(states), axis=0)
     rates = np.full((2, t_out.size), np.nan)

@@ -45,9 +45,10 @@ Limits (measured, work in progress for issue 16)
   the blade within about a centimetre through a section and breaks in the last half second of the
   stop into a cusp: the blade comes to rest early, reverses, and the mass rates the law commands
   grow without bound. (A guess, not checked: near rest the pose can be corrected only by
-  swinging the mass, far outside where the linearisation holds.) A reference indexed by progress along the figure, momenta measured through the model's
-  parameters, saturated corrections, pose weights faded with the speed, and ending a section
-  when the blade stops were each tried and were not enough.
+  swinging the mass, far outside where the linearisation holds.) A reference indexed by progress
+  along the figure, momenta measured through the model's parameters, saturated corrections, pose
+  weights faded with the speed, and ending a section when the blade stops were each tried and
+  were not enough.
 """
 
 from __future__ import annotations

@@ -54,6 +54,12 @@ class Reference:
     def duration(self) -> float:
         return float(self.grid[-1])
 
+    def spans(self) -> list[tuple[float, float]]:
+        """The smooth stretches ``(t0, t1)`` between the jumps of the rates (the repeated times)."""
+        g = self.grid
+        cuts = np.concatenate([[g[0]], g[1:][np.diff(g) == 0.0], [g[-1]]])
+        return [(float(c0), float(c1)) for c0, c1 in zip(cuts[:-1], cuts[1:]) if c1 > c0]
+
     def state_at(self, tau) -> tuple[np.ndarray, np.ndarray]:
         """States ``(7, n)`` and rates ``(2, n)`` at section times ``tau`` (clamped to the section;
         from the right at a jump)."""

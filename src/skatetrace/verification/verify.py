@@ -455,6 +455,7 @@ def _conditioning(trace: FigureTrace, schedule: ControlSchedule, rep: Replay, se
     """
     spread_xy = {si: 0.0 for si in sections}
     spread_v = {si: 0.0 for si in sections}
+    rows = {si: np.flatnonzero(rep.section == si) for si in sections}
     _, v0, _ = rep.velocities(trace.params)
     for sign in (1.0, -1.0):
         f = 1.0 + sign * PERTURBATION
@@ -464,9 +465,9 @@ def _conditioning(trace: FigureTrace, schedule: ControlSchedule, rep: Replay, se
             return {si: {"perturbation": PERTURBATION, "ill_conditioned": False} for si in sections}
         _, v1, _ = other.velocities(trace.params)
         d = np.hypot(*(other.state[3:5] - rep.state[3:5]))
-        for si in sections:
-            m = np.flatnonzero(rep.section == si)
-            spread_xy[si] = max(spread_xy[si], float(np.max(d[m], initial=0.0)) if np.all(np.isfinite(d[m])) else math.inf)
+        for si, m in rows.items():
+            far = float(np.max(d[m], initial=0.0)) if np.all(np.isfinite(d[m])) else math.inf
+            spread_xy[si] = max(spread_xy[si], far)
             ends = m[[0, -1]]
             spread_v[si] = max(spread_v[si], float(np.max(np.abs(np.abs(v1[ends]) - np.abs(v0[ends])))))
     size = trace.figure.size()
@@ -492,7 +493,7 @@ MAX_CLOSED_LOOP_TURNS = 20.0
 
 def _closed_loop_resolves(trace: FigureTrace, si: int) -> bool:
     """Whether section ``si`` is short enough in turning for the closed loop's reference."""
-    turning = sum(p.segment.length * float(np.max(np.abs(p.segment.curvature_at(np.linspace(0.0, p.segment.length, 33)))))
+    turning = sum(abs(p.segment.turn) if p.segment.constant else p.segment.length * p.segment.max_abs_curvature()
                   for p in trace.sections[si].section.pieces)
     return turning <= MAX_CLOSED_LOOP_TURNS * 2 * math.pi
 
@@ -610,8 +611,9 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         if si in conditioning:
             record["conditioning"] = conditioning[si]
         if record.get("max_correction", 0.0) > rel_tol:
-            problems.append(f"section {si}: the closed loop departed from the schedule by {record['max_correction']:.3g} "
-                            f"of its fastest rate (limit {rel_tol:g}), so it does not vouch for it")
+            problems.append(f"section {si}: the closed loop departed from the schedule by "
+                            f"{record['max_correction']:.3g} of its fastest rate (limit {rel_tol:g}), "
+                            "so it does not vouch for it")
         sections.append(record)
         drifts.extend(d)
         if not record["traced"]:
