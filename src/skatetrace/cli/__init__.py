@@ -1,6 +1,8 @@
 """The ``skatetrace`` command line: the only place that prints or exits.
 
-The commands (:mod:`.commands`) and the compiled-code warm-up they run first (:mod:`.compiled`).
+The commands (:mod:`.commands`, and :mod:`skatetrace.cli.robustness` for ``skatetrace
+robustness``), the values with units they read (:mod:`.values`) and the compiled-code warm-up they
+run first (:mod:`.compiled`).
 """
 
 from .commands import build_parser, main

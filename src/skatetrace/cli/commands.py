@@ -1,7 +1,8 @@
-"""Command-line interface: ``skatetrace trace``, ``tradeoff``, ``fit``, ``animate``, ``view``, ``figures``, ``reproduce``.
+"""The ``skatetrace`` subcommands: trace, tradeoff, fit, animate, view, robustness, figures, reproduce.
 
-The only module that prints or exits. Exit codes: 0 success, 1 a solve or verification that
-failed, 2 a usage error (bad arguments, unreadable or malformed figure file).
+With :mod:`skatetrace.cli.robustness` (that command's own), the only modules that print or exit.
+Exit codes: 0 success, 1 a solve or verification that failed, 2 a usage error (bad arguments,
+unreadable or malformed figure file).
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ from ..drawings.sources import DRAWING_SUFFIXES
 from ..pipeline import REST_POLICIES
 from ..dynamics.presets import REACH_PER_HEIGHT
 from ..tracing.sections import TraceOptions
+from .robustness import add_parser as _add_robustness_parser
+from .robustness import run as _robustness
+from .values import figure_length
 
 __all__ = ["build_parser", "main"]
 
@@ -60,17 +64,6 @@ def _add_planner_args(t) -> None:
                    help="largest acceleration of the mass on the ice (figure units per s^2, e.g. m/s^2)")
 
 
-def _reach_length(text: str, unit: str, flag: str) -> float:
-    """One reach written by the user, in the figure's units: a physical length only for a figure in metres."""
-    from ..drawings.lengths import parse_length
-
-    value, given = parse_length(text)
-    if given == "m" and unit != "m":
-        raise SkatetraceError(f"{flag} {text!r} is a physical length but the figure is in model units: give "
-                              "a plain number (model units)")
-    return value
-
-
 def _reach(args, unit: str) -> float | None:
     """``--reach`` in the figure's units: a length, ``auto`` (from ``--height``) or ``none``."""
     from ..dynamics.presets import skater_reach
@@ -83,7 +76,7 @@ def _reach(args, unit: str) -> float | None:
             raise SkatetraceError("--reach auto derives the reach from --height, for figures in metres; this figure "
                                   "is in model units: give a number (model units) or 'none'")
         return skater_reach(args.height)
-    return _reach_length(args.reach, unit, "--reach")
+    return figure_length(args.reach, unit, "--reach")
 
 
 def _version() -> str:
@@ -175,6 +168,7 @@ def build_parser() -> argparse.ArgumentParser:
     v = sub.add_parser("view", help="one self-contained HTML file that plays a traced figure (no network needed)")
     v.add_argument("source", help="the output folder of 'skatetrace trace', or its result.json")
     v.add_argument("-o", "--output", help="HTML file to write (default: viewer.html in the source folder)")
+    _add_robustness_parser(sub)
     sub.add_parser("figures", help="list the built-in figures and the school figures")
     r = sub.add_parser("reproduce", help="reproduce the paper's tables three ways, with figures and errata")
     r.add_argument("--out", default="rep", help="output folder (default: rep)")
@@ -582,7 +576,7 @@ def _reaches(args, unit: str) -> list[float]:
     if args.reaches is None:
         base = skater_reach(args.height) if unit == "m" else 1.0
         return [f * base for f in (0.6, 0.8, 1.0, 1.25, 1.5)]
-    return [_reach_length(word, unit, "--reaches") for word in args.reaches.split(",")]
+    return [figure_length(word, unit, "--reaches") for word in args.reaches.split(",")]
 
 
 def _tradeoff(args) -> int:
@@ -628,7 +622,7 @@ def _tradeoff(args) -> int:
 
 def _run(args) -> int:
     commands = {"figures": _figures, "fit": _fit, "reproduce": _reproduce, "animate": _animate, "view": _view,
-                "trace": _trace, "tradeoff": _tradeoff}
+                "trace": _trace, "tradeoff": _tradeoff, "robustness": _robustness}
     return commands[args.command](args)
 
 

@@ -3,7 +3,9 @@
 Each section is integrated over its reference duration with the classical fourth-order Runge-Kutta
 method at a fixed step, all trials side by side in numpy arrays. The sleigh of each trial may differ
 from the controller's model (``M, m, I``) and start off the figure, and the controller may see its
-state late (``delay``) and with noise on the position (``noise``).
+state late (``delay``) and with noise on the position (``noise``). The controller measures motion,
+not momenta: it sees the momenta that its own model gives to the blade's measured velocities and
+the mass's motion (the same as the sleigh's own where the sleigh is the model).
 
 - **Open loop**: the rates are the schedule's.
 - **Closed loop**: the rates are the :class:`~skatetrace.feedback.lqr.TrackingLaw`'s.
@@ -25,7 +27,7 @@ from ..dynamics.simulate import simulate
 from .lqr import TrackingLaw
 from .reference import Reference, rhs
 
-__all__ = ["Plant", "LoopRun", "run_loop"]
+__all__ = ["Plant", "LoopRun", "loop_sections", "run_loop"]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -93,9 +95,30 @@ class _Section:
 
     def __init__(self, ref: Reference, plant: Plant, law: TrackingLaw | None, h: float, history: np.ndarray):
         self.ref, self.plant, self.law, self.h = ref, plant, law, h
-        self.hist = history  # (7, k, n): the states recorded at t = j h, read by the delay line
+        self.hist = np.empty_like(history)  # (7, k, n) like the samples: what the controller saw at t = j h
         self.count = 0  # how many of them are recorded
         self.noise = np.zeros((2, plant.trials))
+        _, u0 = ref.state_at(np.zeros(plant.trials))
+        self.last = u0  # the rates last commanded, (2, n): the controller knows them
+
+    def sense(self, z: np.ndarray) -> np.ndarray:
+        """What the controller makes of the state ``z``: its momenta are the law's model's for the
+        motion measured (the blade's speed and turning rate, the mass's position and the rates last
+        commanded). A skater or a robot measures motion, not momenta; where the sleigh is the model
+        this is ``z`` itself."""
+        model = getattr(self.law, "params", None)
+        if model is None:
+            return z
+        p, (ad, bd) = self.plant, self.last
+        xi1, xi2, _ = body_velocities(p.M, p.m, p.I, z[0], z[1], z[5], z[6], ad, bd)
+        seen = z.copy()
+        seen[0], seen[1] = momenta(model, xi1, xi2, z[5], z[6], ad, bd)
+        return seen
+
+    def record(self, k: int, z: np.ndarray) -> None:
+        """Keep what the controller sees at step ``k`` for the delay line."""
+        self.hist[:, k] = self.sense(z)
+        self.count = k + 1
 
     def measured(self, t: float, z: np.ndarray) -> np.ndarray:
         """The state the controller sees at time ``t``: ``delay`` old, with noise on the position."""
@@ -106,6 +129,8 @@ class _Section:
             j1 = min(j + 1, self.count - 1)
             w = min(tm - j, 1.0)
             z = (1 - w) * self.hist[:, j] + w * self.hist[:, j1]
+        else:
+            z = self.sense(z)
         if self.plant.noise > 0.0:
             z = z.copy()
             z[3:5] += self.noise
@@ -116,7 +141,9 @@ class _Section:
             _, u = self.ref.state_at(np.full(z.shape[1], t))
             return u[0], u[1]
         # a late measurement is compared with the reference at its own time
-        return self.law.rates(t, self.measured(t, z), max(t - self.plant.delay, 0.0))
+        ad, bd = self.law.rates(t, self.measured(t, z), max(t - self.plant.delay, 0.0))
+        self.last = (ad, bd)
+        return ad, bd
 
     def derivative(self, t: float, z: np.ndarray, rates=None) -> np.ndarray:
         return rhs(self.plant, z, *(self.rates(t, z) if rates is None else rates))
@@ -152,13 +179,24 @@ def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw 
     seed : int
         Seed of the measurement noise.
     """
+    return LoopRun(sections=tuple(loop_sections(refs, plant, laws, steps=steps, seed=seed)), closed=laws is not None)
+
+
+def loop_sections(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw | None] | None, *,
+                  steps: int = 4000, seed: int = 0):
+    """:func:`run_loop` one section at a time: yields each section's samples as soon as they are integrated.
+
+    Each item is what :class:`LoopRun` holds for the section (a dict, or ``None`` where it was not
+    traced). A caller that measures a section and lets its samples go before asking for the next
+    holds one section's samples at a time, not the whole figure's. The arguments are
+    :func:`run_loop`'s, and so are the samples, to the bit.
+    """
     rng = np.random.default_rng(seed)
     n = plant.trials
-    out = []
     prev_end = None
     for si, ref in enumerate(refs):
         if ref is None:
-            out.append(None)
+            yield None
             prev_end = None
             continue
         T = ref.duration
@@ -171,17 +209,16 @@ def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw 
         for k in range(count + 1):
             t = k * h
             ts[k], zs[:, k] = t, z
-            sec.count = k + 1
+            sec.record(k, z)
             if plant.noise > 0.0:
                 sec.noise = rng.normal(0.0, plant.noise, (2, n))
             vs[k], rs[:, k] = sec.speed(t, z)
             if k == count:
                 break
             z = sec.step(t, z, h, rs[:, k])
-        out.append({"t": ts, "state": zs, "rates": rs, "xi2": vs,
-                    "cusp_speed": np.abs(np.vstack([vs[0], vs[-1]])).T})
         prev_end = z
-    return LoopRun(sections=tuple(out), closed=laws is not None)
+        yield {"t": ts, "state": zs, "rates": rs, "xi2": vs, "cusp_speed": np.abs(np.vstack([vs[0], vs[-1]])).T}
+        del ts, zs, rs, vs, sec  # the caller's copy is the only one left while the next section runs
 
 
 def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out, *, rtol: float = 1e-12,

@@ -33,22 +33,18 @@ the mass position by a tenth of its largest distance from the blade (at least ``
 rates by the fastest mass rate of the section (times ``rate_weight``, default 100: see
 :class:`TrackingGains`).
 
-Limits (measured, work in progress for issue 16)
-------------------------------------------------
+Limits (measured; ``docs/concepts/feedback.md`` has the details)
+-----------------------------------------------------------------
 - On the trace it reproduces the exact motion: the circle eight (1.7 m skater) stays within
   1.7e-9 of its size in a nominal closed-loop run (the open-loop schedule on the same integrator:
   1.7e-7), with rests at 1.7e-8 m/s. This is what verification relies on where the open-loop
   replay is ill-conditioned: there the law corrects the schedule by 1e-11 to 1e-9 of its rates.
-- It does not yet hold a sleigh whose parameters differ from the model's. Under +-1 % error the
-  unplanned circle eight strays up to 3.4e-3 of its size (open loop: metres); the circle eight
-  planned within 0.5 m diverges in 3 of 8 trials, and at +-5 % most trials diverge. The law holds
-  the blade within about a centimetre through a section and breaks in the last half second of the
-  stop into a cusp: the blade comes to rest early, reverses, and the mass rates the law commands
-  grow without bound. (A guess, not checked: near rest the pose can be corrected only by
-  swinging the mass, far outside where the linearisation holds.) A reference indexed by progress
-  along the figure, momenta measured through the model's parameters, saturated corrections, pose
-  weights faded with the speed, and ending a section when the blade stops were each tried and
-  were not enough.
+- For a sleigh that is not the model use :func:`robust_gains` and give the law the momenta its
+  model assigns to the measured motion (as :mod:`~skatetrace.feedback.closed_loop` does). Under
+  +-5 % on ``M, m, I``, 1 mm / 0.5 deg and a 10 ms delay, the circle eight planned within 0.5 m
+  stays within 0.157 m (p95 of 32; open loop 2.98 m), none diverging; the error is made where the
+  plan glides with the mass over the contact point. The launch-glide-stop circle eight (the mass
+  metres away) still diverges in 7 of 32, in the stop into a cusp.
 """
 
 from __future__ import annotations
@@ -62,7 +58,10 @@ from ..dynamics.model import SleighParams
 from ..dynamics.simulate import Controller
 from .reference import Reference, rhs
 
-__all__ = ["TrackingGains", "TrackingLaw", "default_gains", "design"]
+__all__ = ["ROBUST_RATE_WEIGHT", "TrackingGains", "TrackingLaw", "default_gains", "design", "robust_gains"]
+
+#: Rate weight of :func:`robust_gains` (measured, not tuned per figure: see ``docs/concepts/feedback.md``).
+ROBUST_RATE_WEIGHT = 3000.0
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -105,8 +104,23 @@ class TrackingGains:
 
 
 def default_gains(size: float) -> TrackingGains:
-    """``length`` a hundredth of the figure's size: a correction stays local to the figure."""
+    """``length`` a hundredth of the figure's size: a correction stays local to the figure.
+
+    For the model itself (verification): a stiff law, fastest mode near 200 /s. For a sleigh that
+    is not the model, see :func:`robust_gains`.
+    """
     return TrackingGains(length=0.01 * size, size=size)
+
+
+def robust_gains(size: float, rate_weight: float = ROBUST_RATE_WEIGHT) -> TrackingGains:
+    """:func:`default_gains` with the rates ``rate_weight`` times as costly: a slower law for a sleigh
+    whose masses and inertia are off by percents.
+
+    A fast law amplifies a model error: with the sleigh's mass 5 % off, the law of
+    :func:`default_gains` drives the mass rates without bound within seconds, and a slower one does
+    not (measured on the circle eight in ``docs/concepts/feedback.md``).
+    """
+    return TrackingGains(length=0.01 * size, size=size, rate_weight=rate_weight)
 
 
 def _jacobians(p: SleighParams, z: np.ndarray, u: np.ndarray):
@@ -133,6 +147,9 @@ class TrackingLaw:
 
     ``success`` is False (and ``message`` says why) where the Riccati equation could not be
     solved; ``K`` is then zero, the open loop: check ``success`` before relying on the law.
+    ``params`` is the model the law was designed for: a replay of a different sleigh
+    (:class:`~skatetrace.feedback.closed_loop.Plant`) shows the law the momenta this model gives to
+    the motion it measures.
     """
 
     reference: Reference
@@ -140,6 +157,7 @@ class TrackingLaw:
     K: np.ndarray
     success: bool = True
     message: str = "gains designed"
+    params: SleighParams | None = None
 
     def rates(self, tau, z: np.ndarray, measured_at=None) -> tuple[np.ndarray, np.ndarray]:
         """Mass rates at section time ``tau`` for states ``z`` (7, n) measured at ``measured_at``
@@ -168,6 +186,38 @@ class TrackingLaw:
             return float(ad[0]), float(bd[0])
 
         return Controller(rates)
+
+    def thinned(self, rel_tol: float = 1e-3, start: int = 256) -> "TrackingLaw":
+        """The same law with ``K`` kept at fewer times: linear interpolation between them stays within
+        ``rel_tol`` of the largest gain at every dropped time (the rows of a fine reference run to
+        millions; their gains to hundreds of megabytes of ``feedback.json``).
+
+        Starts from ``start`` times spread evenly (and both sides of every jump of the rates), and
+        adds the middle time of every interval that misses the bound until none does.
+        """
+        t, K = self.t, self.K.reshape(self.t.size, -1)
+        n = t.size
+        if n <= start:
+            return self
+        scale = max(float(np.max(np.abs(K))), 1e-300) * rel_tol
+        jumps = np.flatnonzero(np.diff(t) == 0.0)
+        keep = np.zeros(n, dtype=bool)
+        keep[np.linspace(0, n - 1, start).astype(int)] = True
+        keep[jumps], keep[jumps + 1] = True, True
+        while True:
+            idx = np.flatnonzero(keep)
+            # the interpolant of each dropped row from the kept rows around it (index space: exact at jumps)
+            seg = np.clip(np.searchsorted(idx, np.arange(n), side="right") - 1, 0, idx.size - 2)
+            lo, hi = idx[seg], idx[seg + 1]
+            h = t[hi] - t[lo]
+            w = np.where(h > 0, (t - t[lo]) / np.where(h > 0, h, 1.0), 0.0)
+            err = np.max(np.abs((1 - w)[:, None] * K[lo] + w[:, None] * K[hi] - K), axis=1)
+            bad = np.unique(seg[(err > scale) & ~keep])
+            if bad.size == 0:
+                break
+            keep[(idx[bad] + idx[bad + 1]) // 2] = True
+        return TrackingLaw(reference=self.reference, t=t[keep], K=self.K[keep], success=self.success,
+                           message=self.message, params=self.params)
 
     def gain(self, tau, n: int = 1) -> np.ndarray:
         """``K`` at section times ``tau`` (linear between the rows), shape ``(n, 2, 7)``."""
@@ -227,7 +277,7 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nf
 
     T = float(t[-1])
     failed = TrackingLaw(reference=ref, t=t, K=np.zeros((t.size, 2, 7)), success=False,
-                         message="the Riccati equation could not be solved over the section")
+                         message="the Riccati equation could not be solved over the section", params=params)
     if not (np.all(np.isfinite(As)) and np.all(np.isfinite(Bs)) and np.all(np.isfinite(Rinv))):
         return failed
     try:
@@ -245,4 +295,4 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nf
     K = Ks * (1 / s)[None, None, :]
     if not np.all(np.isfinite(K)):
         return failed
-    return TrackingLaw(reference=ref, t=t, K=K)
+    return TrackingLaw(reference=ref, t=t, K=K, params=params)

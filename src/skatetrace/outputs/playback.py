@@ -19,7 +19,7 @@ import numpy as np
 from ..dynamics.model import SleighParams, mass_energy
 from ..errors import SkatetraceError
 from ..figures.geometry import segment_points
-from .results import load_result, read_controls
+from .results import read_result_folder
 
 __all__ = ["Playback", "load_playback"]
 
@@ -124,18 +124,8 @@ def load_playback(source: str | Path) -> Playback:
     SkatetraceError
         A missing or unreadable ``result.json`` or ``controls.csv``, or files that do not match.
     """
-    source = Path(source)
-    folder = source.parent if source.suffix == ".json" else source
-    result_path, controls_path = folder / "result.json", folder / "controls.csv"
-    for p in (result_path, controls_path):
-        if not p.is_file():
-            raise SkatetraceError(f"{p} not found: give the output folder of 'skatetrace trace' "
-                                  "(it holds result.json and controls.csv)")
-    try:
-        result = load_result(result_path)
-        cols = read_controls(controls_path)
-    except (ValueError, KeyError) as exc:
-        raise SkatetraceError(f"cannot read the results in {folder}: {exc}") from None
+    folder, result, cols = read_result_folder(source)
+    controls_path = folder / "controls.csv"
     if cols["t"].size < 2:
         raise SkatetraceError(f"{controls_path} holds fewer than two rows: nothing to play")
     p = result["params"]

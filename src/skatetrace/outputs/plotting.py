@@ -25,7 +25,7 @@ if TYPE_CHECKING:  # annotations only: importing plotting does not load the trac
     from ..verification.verify import VerificationReport
 
 __all__ = ["axis_units", "plot_figure", "plot_controls", "plot_speed", "plot_mass_path", "plot_energies",
-           "plot_fit", "plot_fit_curvature", "fit_figure", "save_all", "tradeoff_figure"]
+           "plot_fit", "plot_fit_curvature", "fit_figure", "save_all", "tradeoff_figure", "robustness_figure"]
 
 _UNITS = {
     "m": {"length": "m", "time": "s", "speed": "m/s", "acceleration": "m/s²", "energy": "J", "curvature": "1/m"},
@@ -477,3 +477,79 @@ def tradeoff_figure(sweep, *, unit: str = "model"):
     axes[-1].set_xlabel(f"reach: largest distance of the mass from the blade ({u['length']})")
     axes[0].set_title(f"{sweep.figure}: the cost of a smaller reach (least {sweep.objective})")
     return fig
+
+
+def _paths(ax, paths, colour: str, label: str, far: tuple[float, float, float]) -> None:
+    """Every kept trial's blade path, thin and see-through; points far off the figure are left out."""
+    cx, cy, reach = far
+    labelled = False
+    for path in paths:
+        if path is None:
+            continue
+        x, y = path[0], path[1]
+        with np.errstate(invalid="ignore"):
+            off = ~(np.abs(x - cx) + np.abs(y - cy) <= reach)  # NaN too: drawing stops where the replay diverged
+        lines = ax.plot(np.where(off, np.nan, x), np.where(off, np.nan, y), "-", color=colour, lw=0.6, alpha=0.35)
+        if lines and not labelled:
+            lines[0].set_label(label)
+            labelled = True
+
+
+def robustness_figure(report, sections, *, name: str = "", unit: str = "model"):
+    """robustness.png's figure: the target figure and the replayed blade paths of both families over it.
+
+    Parameters
+    ----------
+    report : RobustnessReport
+        A study of :func:`skatetrace.feedback.robustness.robustness`; its kept paths are drawn, the
+        open loop in red, the closed loop in blue.
+    sections : sequence of Section
+        The figure's sections (the target, dashed grey).
+    name, unit : str
+        The figure's name for the title; its unit of length (see :func:`axis_units`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Not registered with pyplot. The axes show the figure with a margin of a fifth of its size:
+        paths that stray further leave the frame.
+    """
+    from matplotlib.figure import Figure
+
+    from ..feedback.robustness import quantiles
+
+    u = axis_units(unit)
+    pieces = [p for s in sections for p in s.pieces]
+    xy = np.hstack([segment_points(p.start, p.segment, 200) for p in pieces])
+    size = report.figure_size
+    pad = 0.2 * size
+    x0, x1, y0, y1 = xy[0].min() - pad, xy[0].max() + pad, xy[1].min() - pad, xy[1].max() + pad
+    # the frame takes the figure's own shape; title above, legend below
+    fig = Figure(figsize=(9.0, float(np.clip(8.0 * (y1 - y0) / (x1 - x0), 3.5, 9.0)) + 2.2), layout="constrained")
+    ax = fig.subplots()
+    for i, p in enumerate(pieces):
+        pts = segment_points(p.start, p.segment, 200)
+        ax.plot(pts[0], pts[1], "--", color="0.55", lw=2.5, label="target figure" if i == 0 else None)
+    cx, cy = 0.5 * (xy[0].min() + xy[0].max()), 0.5 * (xy[1].min() + xy[1].max())
+    far = (cx, cy, 1e3 * size)
+    for fam, colour, what in ((report.open_loop, "C3", "open loop"), (report.closed_loop, "C0", "closed loop")):
+        p95 = quantiles(fam.deviation)["p95"]
+        shown = min(fam.trials, max((p.shape[2] for p in fam.paths if p is not None), default=0))
+        label = (f"{what}: {shown} of {fam.trials} trials, p95 deviation {p95:.3g} {u['length']}, "
+                 f"{fam.diverged} diverged")
+        _paths(ax, fam.paths, colour, label, far)
+    starts = np.array([(s.pieces[0].start.x, s.pieces[0].start.y) for s in sections])
+    ax.plot(starts[:, 0], starts[:, 1], "o", color="k", ms=3, label="rests (section starts)")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel(f"x ({u['length']})")
+    ax.set_ylabel(f"y ({u['length']})")
+    pert = report.perturbation
+    ax.set_title(f"{name}: {pert.trials} perturbed sleighs, open loop against closed loop\n"
+                 f"M, m, I each within ±{100 * pert.param_error:.3g} %; each curve starts {pert.position_error:.3g} "
+                 f"{u['length']} and ±{np.degrees(pert.angle_error):.3g}° off; delay {pert.delay:.3g} {u['time']}; "
+                 f"noise {pert.noise:.3g} {u['length']}", fontsize=10)
+    fig.legend(loc="outside lower center", fontsize=8, ncols=2)
+    return fig
+

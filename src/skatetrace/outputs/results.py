@@ -17,12 +17,14 @@ from typing import Any
 import numpy as np
 
 from ..dynamics.controls import ControlSchedule
+from ..errors import SkatetraceError
 from ..tracing.sections import FigureTrace
 from ..verification.feasibility import Feasibility
 from ..verification.verify import VerificationReport
 from .files import atomic_write, dumps_json, json_safe
 
-__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "result_dict", "write_results", "load_result", "read_controls"]
+__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "result_dict", "write_results", "load_result", "read_controls",
+           "read_result_folder"]
 
 SCHEMA_VERSION = "skatetrace.result/1"
 CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2")
@@ -134,3 +136,34 @@ def read_controls(path: str | Path) -> dict[str, np.ndarray]:
     out = {k: data[:, i] for i, k in enumerate(CSV_COLUMNS)}
     out["piece"] = out["piece"].astype(int)
     return out
+
+
+def read_result_folder(source: str | Path) -> tuple[Path, dict[str, Any], dict[str, np.ndarray]]:
+    """The output folder of ``skatetrace trace`` (or its ``result.json``): the folder, the result and the controls.
+
+    Returns
+    -------
+    (Path, dict, dict)
+        The folder, :func:`load_result`'s dict and :func:`read_controls`'s columns.
+
+    Raises
+    ------
+    SkatetraceError
+        A missing or unreadable ``result.json`` or ``controls.csv`` (the message names the file).
+    """
+    source = Path(source)
+    folder = source.parent if source.suffix == ".json" else source
+    result_path, controls_path = folder / "result.json", folder / "controls.csv"
+    for p in (result_path, controls_path):
+        if not p.is_file():
+            raise SkatetraceError(f"{p} not found: give the output folder of 'skatetrace trace' "
+                                  "(it holds result.json and controls.csv)")
+    try:
+        result = load_result(result_path)
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise SkatetraceError(f"cannot read the results in {result_path}: {exc}") from None
+    try:
+        cols = read_controls(controls_path)
+    except (OSError, ValueError) as exc:
+        raise SkatetraceError(f"cannot read the results in {controls_path}: {exc}") from None
+    return folder, result, cols
