@@ -21,6 +21,14 @@ def test_bench_paper_arcs_small(capsys):
     assert "ratio" in capsys.readouterr().out
 
 
+def test_bench_robustness_small(capsys):
+    rows = _load("bench_robustness").main(["double-flower", "--trials", "2", "--steps", "200"])
+    d = rows[0]
+    assert "error" not in d and d["schema"] == "skatetrace.robustness/1"
+    assert d["closed_loop"]["trials"] == d["open_loop"]["trials"] == 2
+    assert "double-flower" in capsys.readouterr().out
+
+
 def test_bench_school_small(capsys):
     rows = _load("bench_school").main(["circle-eight"])
     assert rows[0]["figure"] == "circle-eight" and rows[0]["success"]
