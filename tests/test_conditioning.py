@@ -31,16 +31,24 @@ def arcs(tmp_path_factory):
 
 
 def test_the_drawing_verifies_with_the_defaults(arcs):
-    trace, schedule, _ = arcs
+    trace, schedule, rep = arcs
     report = verify(trace, schedule)
     assert report.success, report.message
     assert report.max_deviation <= report.tolerance
-    for sec in report.sections:
+    closed_sections = []
+    for si, sec in enumerate(report.sections):
         if sec["instrument"] == "closed loop":
             # only where the open loop was shown blind, and the law barely touched the schedule
             assert sec["conditioning"]["ill_conditioned"]
             assert sec["max_correction"] <= 1e-6
             assert "open_loop" in sec
+            closed_sections.append(si)
+    assert closed_sections
+    # the report's replay (what figure.png draws) is the one each verdict rests on
+    closed, _ = _closed_loop(trace, rep, closed_sections)
+    np.testing.assert_array_equal(report.replay.state, closed.state)
+    np.testing.assert_array_equal(report.replay.state[:, ~np.isin(rep.section, closed_sections)],
+                                  rep.state[:, ~np.isin(rep.section, closed_sections)])
 
 
 def test_the_long_arc_replay_is_ill_conditioned(arcs):

@@ -192,7 +192,12 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class VerificationReport:
-    """Checks of a traced figure against its independent replay. ``success`` if all pass."""
+    """Checks of a traced figure against its independent replay. ``success`` if all pass.
+
+    ``replay`` holds the rows that decided each section: the open loop's, or the closed loop's
+    where that verified an ill-conditioned section (its record's ``instrument``), so that plots of
+    it show what was checked.
+    """
 
     success: bool
     status: str
@@ -584,6 +589,7 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     rep = replay(trace, schedule)
     measured = _measure(trace, rep, tol)
     conditioning = {}
+    decided = rep  # the rows each section's verdict rests on
     failing = [si for si, (r, _) in measured.items() if r["traced"] and not r["passed"] and trace.sections[si].success]
     if failing and np.all(np.isfinite(rep.state)):
         conditioning = _conditioning(trace, schedule, rep, failing, {si: measured[si][0] for si in failing}, tol)
@@ -593,6 +599,8 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         if ill:
             closed, corrections = _closed_loop(trace, rep, ill)
             ill = list(corrections)
+            if ill:
+                decided = closed
             again = _measure(trace, closed, tol, only=ill)
             for si in ill:
                 record, drifts = again[si]
@@ -640,5 +648,5 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         message="all checks passed" if ok else "; ".join(problems),
         figure_size=size, tolerance=tol, max_deviation=max_dev, max_deviation_to_figure=dev_to,
         max_deviation_from_figure=dev_from, max_cusp_speed=max_cusp, cusp_speeds=cusp_speeds,
-        sections=sections, invariant_drift=drifts, replay=rep,
+        sections=sections, invariant_drift=drifts, replay=decided,
     )
