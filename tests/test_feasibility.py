@@ -168,6 +168,7 @@ def test_nothing_traced_is_not_assessed():
     f = assess_feasibility(trace, schedule, states, _limits())
     assert not f.feasible and f.status == "not assessed"
     assert "feasibility not assessed" in f.verdict(False)
+    assert f.checks == ()  # no motion measured: no check can say "ok"
     _strict(json.dumps({k: v for k, v in f.to_dict().items()}, allow_nan=False, default=str))
 
 

@@ -277,6 +277,9 @@ def _print_feasibility(done) -> None:
     if f is None:
         return
     print(f"feasibility: {f.status} (limits for {f.limits.assumptions})")
+    if f.status == "not assessed":
+        print(f"  {f.message}")
+        return
     for c in f.checks:
         print(f"  {'ok' if c.passed else 'BEYOND':>6}  {c.phrase()}")
     info = f.info

@@ -447,8 +447,9 @@ def assess_feasibility(trace, schedule: ControlSchedule, states: dict[str, np.nd
             "rows": n}
     failed = [c for c in checks if not c.passed]
     if n == 0:
+        # nothing measured, nothing passed: a check of no motion against a limit would read "ok"
         return Feasibility(feasible=False, status="not assessed", message="no controls to assess (nothing was traced)",
-                           checks=tuple(checks), limits=limits, info=info)
+                           checks=(), limits=limits, info=info)
     if not failed:
         return Feasibility(feasible=True, status="feasible", message="every check within human limits",
                            checks=tuple(checks), limits=limits, info=info)
