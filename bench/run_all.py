@@ -234,6 +234,15 @@ def _hand_analysis() -> dict[str, str]:
     return {k: "\n".join(v).strip() for k, v in out.items()}
 
 
+def robustness_section() -> list[str]:
+    """Closed-loop robustness per school figure, as ``bench/bench_robustness.py --markdown`` recorded it
+    in ``bench/ROBUSTNESS.md`` (a run of a quarter of an hour, kept out of this runner)."""
+    path = Path(__file__).resolve().parent / "ROBUSTNESS.md"
+    body = path.read_text(encoding="utf-8").strip() if path.is_file() else \
+        "Not recorded: run `python bench/bench_robustness.py --markdown bench/ROBUSTNESS.md`."
+    return ["## Robustness: open loop against the tracking law (issue 16)", "", body]
+
+
 def profile_section(res: dict, tgt: list[dict]) -> list[str]:
     """The measured stage breakdown per unmet target, with a placeholder paragraph to fill in."""
     unmet = {t["key"] for t in tgt if t["met"] is False}
@@ -450,6 +459,7 @@ def write_markdown(path: Path, res: dict, meta: dict) -> None:
             L += ["", f"Slope of log(arcs + lines) against log(1/tol): {_f(tol['slope_arcs'], '.3f')} (an arc "
                   f"spline's error falls as h^3, so about 1/3 is expected); of log(fit time): "
                   f"{_f(tol['slope_fit_time'], '.3f')}."]
+    L += [""] + robustness_section()
     L += [""] + profile_section(res, tgt)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(L) + "\n")

@@ -21,12 +21,15 @@ def test_bench_paper_arcs_small(capsys):
     assert "ratio" in capsys.readouterr().out
 
 
-def test_bench_robustness_small(capsys):
-    rows = _load("bench_robustness").main(["double-flower", "--trials", "2", "--steps", "200"])
+def test_bench_robustness_small(capsys, tmp_path):
+    md = tmp_path / "ROBUSTNESS.md"
+    rows = _load("bench_robustness").main(["double-flower", "--trials", "2", "--steps", "200", "--markdown", str(md)])
     d = rows[0]
     assert "error" not in d and d["schema"] == "skatetrace.robustness/1"
     assert d["closed_loop"]["trials"] == d["open_loop"]["trials"] == 2
     assert "double-flower" in capsys.readouterr().out
+    text = md.read_text()
+    assert "| double-flower |" in text and "with 2 trials" in text
 
 
 def test_bench_school_small(capsys):
