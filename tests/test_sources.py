@@ -191,3 +191,20 @@ def test_cli_fit_shows_both_modes(tmp_path, capsys):
     assert data["hausdorff_certified"] <= 1e-3 and data["exact"]["deviation"] <= data["exact"]["tol"] == 2e-6
     assert "arc mode: certified Hausdorff distance" in text and "exact mode:" in text
     assert any(p["type"] == "spiral" for c in data["figure"]["curves"] for p in c["pieces"])
+
+
+def test_a_tiny_kink_becomes_a_corner_when_keeping_it_smooth_would_break_the_fit(tmp_path, recwarn):
+    """Issue 17's reproducer: a 0.086 degree kink, below the 0.5 degree corner threshold. Kept smooth,
+    it turns the rest of the line and the fit fails (bound 2.8 mm at 1 mm); chosen from the tolerance,
+    it is a corner (a rest) and the fit is certified."""
+    path = tmp_path / "kink.svg"
+    path.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M0 0 L10 0 L20 0.015" stroke="black" '
+                    'fill="none"/></svg>')
+    r = resolve(str(path), size="6m", tol="1mm")
+    assert r.fit.success and r.fit.hausdorff <= 1e-3
+    assert len(r.fit.paths[0].runs) == 2  # the kink split the path
+    assert any("made corners (rests)" in n for n in r.notes)
+    assert not [w for w in recwarn if "could not be fitted" in str(w.message)]  # the answered complaint is not shown
+    # a drawing the default threshold fits is left alone: no note, the same runs
+    plain = resolve(str(EXAMPLES / "figure-eight.svg"), size="6m", tol="1mm")
+    assert not any("made corners" in n for n in plain.notes)

@@ -19,6 +19,7 @@ notebooks share it.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -214,6 +215,16 @@ def _exact_note(exact) -> tuple[str, ...]:
     return ("exact mode applies to drawings; this figure's arcs, lines and spirals are traced as given",)
 
 
+def _kink_corner_deg(drawing: Drawing, tol: float) -> float:
+    """Smallest turn (degrees, at most ``EXACT_MAX_CORNER_DEG``) of a join that must be a corner.
+
+    A join whose tangent turns by ``delta`` displaces the rest of the path by about ``delta`` times
+    its length when it is kept smooth: a corner from a tenth of ``tol`` on.
+    """
+    length = sum(p.length() for p in drawing.paths)
+    return min(EXACT_MAX_CORNER_DEG, math.degrees(tol / (10.0 * length))) if length > 0 else EXACT_MAX_CORNER_DEG
+
+
 def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float, exact=None) -> Resolved:
     from .fitting import fit_drawing
     from .to_figure import figure_from_fit
@@ -231,7 +242,21 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     if value is None:
         _check_size(fsize, f"the drawing {drawing.name!r}, in its own units,")
     tol_v = _tol(tol, unit, fsize, floor=MIN_REL_TOL)
-    fit = fit_drawing(drawing, tol_v, method=method)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit = fit_drawing(drawing, tol_v, method=method)
+    tight = _kink_corner_deg(drawing, tol_v)
+    if not fit.success and tight < EXACT_MAX_CORNER_DEG:
+        # The arc spline is tangent-continuous through a smooth join, so a join that turns by delta
+        # displaces the rest of its run by about delta times its length: where that breaks the fit,
+        # every join that could cost a tenth of the tolerance is made a corner (a rest) instead.
+        retry = fit_drawing(drawing, tol_v, method=method, corner_tol_deg=tight)
+        if retry.success:
+            notes.append(f"joins turning by more than {tight:.2g} degrees made corners (rests): kept smooth, "
+                         f"they moved the rest of their curve by more than the tolerance ({fit.message})")
+            fit, caught = retry, []  # the first attempt's complaints were answered
+    for w in caught:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if not fit.success:
         raise SkatetraceError(f"could not fit {drawing.name!r} within {tol_v:.3g}: {fit.message}")
     params = skater_params(body_mass, height) if unit == "m" else SleighParams()
@@ -245,11 +270,8 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     from .exact_figure import figure_from_exact
 
     exact_v = _tol(None if exact is True else exact, unit, fsize, DEFAULT_EXACT_REL_TOL)
-    # A join whose tangent turns by delta displaces the rest of the path by about delta times its
-    # length, so in exact mode any kink that could cost a tenth of the tolerance is a corner.
-    length = sum(p.length() for p in drawing.paths)
-    corner_tol = min(EXACT_MAX_CORNER_DEG, math.degrees(exact_v / (10.0 * length)))
-    ex = fit_exact_drawing(drawing, exact_v, corner_tol_deg=corner_tol)
+    # in exact mode any kink that could cost a tenth of the tolerance is a corner
+    ex = fit_exact_drawing(drawing, exact_v, corner_tol_deg=_kink_corner_deg(drawing, exact_v))
     if not ex.success:
         raise SkatetraceError(f"could not represent {drawing.name!r} exactly within {exact_v:.3g}: {ex.message}")
     fig = _merged(figure_from_exact(ex, name=drawing.name, params=params))
