@@ -30,7 +30,7 @@ def test_trace_user_figure_writes_everything(tmp_path, capsys):
     assert report["success"] and report["max_deviation"] < 1e-8
     assert {"figure.png", "controls.png", "speed.png", "mass_path.png", "energies.png"} <= {p.name for p in out.iterdir()}
     rows = list(csv.DictReader((out / "controls.csv").open()))
-    assert list(rows[0]) == "piece,t,a,b,adot,bdot,x,y,theta,p1,p2,xi1,xi2".split(",")
+    assert list(rows[0]) == "piece,t,a,b,adot,bdot,x,y,theta,p1,p2,xi1,xi2,curve,section".split(",")
     t = np.array([float(r["t"]) for r in rows])
     assert np.all(np.diff(t) >= 0) and t[-1] > 0
     # Hermite interpolation of the samples reproduces the controls between samples

@@ -13,6 +13,7 @@ from skatetrace.errors import SkatetraceError
 from skatetrace.feedback import design, default_gains
 from skatetrace.feedback.robustness import (SCHEMA, LoopOutcome, Perturbation, RobustnessStatus, default_perturbation,
                                             lqr_laws, perturbed_plant, quantiles, robustness)
+from skatetrace.outputs.results import read_controls
 from skatetrace.outputs.traced import load_feedback, load_traced
 
 TWO_CURVES = {"schema": "skatetrace.figure/1", "name": "two strokes", "params": {"M": 2, "m": 1, "I": 3},
@@ -216,6 +217,27 @@ def test_a_folder_reads_back_as_sections_and_references(folder, tmp_path):
     starts = [s.pieces[0].start for s in two.sections]
     for ref, start in zip(two.references, starts):
         assert np.hypot(ref.z[3, 0] - start.x, ref.z[4, 0] - start.y) < 1e-12
+    # controls.csv names each row's curve and section (piece restarts at 0 on every curve)
+    cols = read_controls(tmp_path / "two" / "controls.csv")
+    assert set(cols["piece"].tolist()) == {0}
+    assert cols["curve"].tolist() == cols["section"].tolist() and set(cols["curve"].tolist()) == {0, 1}
+    assert np.all(np.diff(cols["section"]) >= 0) and np.all(np.diff(cols["t"]) >= 0)
+    assert json.loads((tmp_path / "two" / "result.json").read_text())["controls_schema"] == "skatetrace.controls/2"
+    # a folder written before the columns were added still reads, to the same references
+    lines = (tmp_path / "two" / "controls.csv").read_text().splitlines()
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "result.json").write_text((tmp_path / "two" / "result.json").read_text())
+    (old / "controls.csv").write_text("\n".join(",".join(line.split(",")[:13]) for line in lines) + "\n")
+    legacy = load_traced(old)
+    for a, b in zip(legacy.references, two.references):
+        assert np.array_equal(a.z, b.z) and np.array_equal(a.grid, b.grid)
+    # a section column that contradicts the times is refused
+    body = [line.split(",") for line in lines]
+    body[1][-1] = "1"
+    (old / "controls.csv").write_text("\n".join(",".join(r) for r in body) + "\n")
+    with pytest.raises(SkatetraceError, match="its section column"):
+        load_traced(old)
 
 
 def test_missing_or_broken_folders_are_clear_errors(folder, tmp_path):

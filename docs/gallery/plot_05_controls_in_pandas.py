@@ -30,10 +30,10 @@ print("wrote", ", ".join(p.name for p in written))
 # %%
 # The table
 # ---------
-# Columns: ``piece`` (index of the figure's piece), time ``t``, the mass position ``a`` (along the
-# blade) and ``b`` (to its left) with their rates ``adot``, ``bdot``, the contact point ``x, y`` and
-# heading ``theta``, the momenta ``p1, p2`` and the body velocities ``xi1`` (turning rate) and
-# ``xi2`` (speed along the blade).
+# Columns: ``piece`` (index of the piece within its curve), time ``t``, the mass position ``a``
+# (along the blade) and ``b`` (to its left) with their rates ``adot``, ``bdot``, the contact point
+# ``x, y`` and heading ``theta``, the momenta ``p1, p2``, the body velocities ``xi1`` (turning rate)
+# and ``xi2`` (speed along the blade), and the row's ``curve`` and ``section`` (in skating order).
 controls = pd.read_csv(out / "controls.csv")
 print(controls.shape)
 controls.head()

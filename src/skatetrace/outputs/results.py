@@ -23,11 +23,17 @@ from ..verification.feasibility import Feasibility
 from ..verification.verify import VerificationReport
 from .files import atomic_write, dumps_json, json_safe
 
-__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "result_dict", "write_results", "load_result", "read_controls",
-           "read_result_folder"]
+__all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "CONTROLS_SCHEMA", "LEGACY_CSV_COLUMNS", "result_dict", "write_results",
+           "load_result", "read_controls", "read_result_folder"]
 
 SCHEMA_VERSION = "skatetrace.result/1"
-CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2")
+CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2", "curve",
+               "section")
+#: The columns before ``curve`` and ``section`` were added (``result.json``'s ``controls_schema`` absent); still read.
+LEGACY_CSV_COLUMNS = CSV_COLUMNS[:13]
+#: Recorded in ``result.json`` as ``controls_schema``: the version of ``controls.csv``'s columns.
+CONTROLS_SCHEMA = "skatetrace.controls/2"
+_INT_COLUMNS = ("piece", "curve", "section")
 
 
 _STATE_KEYS = ("p1", "p2", "theta", "x", "y", "a", "b", "adot", "bdot", "xi1", "xi2")
@@ -79,12 +85,18 @@ def result_dict(trace: FigureTrace) -> dict[str, Any]:
     })
 
 
-def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray]) -> str:
-    """``controls.csv``: floats as their shortest round-trip ``repr``, one column at a time."""
+def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray], curve_of_section) -> str:
+    """``controls.csv``: floats as their shortest round-trip ``repr``, one column at a time.
+
+    ``piece`` counts within a curve, so each row also names its ``curve`` (``curve_of_section``:
+    the curve of every section) and ``section`` (in skating order over the figure).
+    """
+    section = np.asarray(schedule.section, dtype=int)
+    curve = np.asarray(curve_of_section, dtype=int)[section] if section.size else section
     cols = {"piece": schedule.piece, "t": schedule.t, "a": schedule.a, "b": schedule.b,
-            "adot": schedule.adot, "bdot": schedule.bdot, **states}
-    text = [list(map(str, np.asarray(cols["piece"], dtype=int).tolist()))]
-    text += [list(map(repr, np.asarray(cols[k], dtype=float).tolist())) for k in CSV_COLUMNS[1:]]
+            "adot": schedule.adot, "bdot": schedule.bdot, **states, "curve": curve, "section": section}
+    text = [list(map(str, np.asarray(cols[k], dtype=int).tolist())) if k in _INT_COLUMNS
+            else list(map(repr, np.asarray(cols[k], dtype=float).tolist())) for k in CSV_COLUMNS]
     return "\n".join([",".join(CSV_COLUMNS), *map(",".join, zip(*text))]) + "\n"
 
 
@@ -99,9 +111,10 @@ def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule
     """
     out = Path(out)
     written = []
-    atomic_write(out / "result.json", dumps_json({**result_dict(trace), "unit": unit}))
+    atomic_write(out / "result.json", dumps_json({**result_dict(trace), "unit": unit,
+                                                  "controls_schema": CONTROLS_SCHEMA}))
     written.append(out / "result.json")
-    atomic_write(out / "controls.csv", _csv_text(schedule, states))
+    atomic_write(out / "controls.csv", _csv_text(schedule, states, [s.curve_index for s in trace.sections]))
     written.append(out / "controls.csv")
     if report is not None:
         data = {"schema": "skatetrace.report/1", **report.to_dict()}
@@ -126,15 +139,24 @@ def load_result(path: str | Path) -> dict[str, Any]:
 
 
 def read_controls(path: str | Path) -> dict[str, np.ndarray]:
-    """Read ``controls.csv`` back into columns (``piece`` as int)."""
+    """Read ``controls.csv`` back into columns (``piece``, ``curve`` and ``section`` as int).
+
+    A file written before ``curve`` and ``section`` were added (:data:`LEGACY_CSV_COLUMNS`) is read
+    without them.
+    """
     path = Path(path)
     with path.open(encoding="utf-8", newline="") as fh:
         rows = list(csv.reader(fh))
-    if not rows or tuple(rows[0]) != CSV_COLUMNS:
+    header = tuple(rows[0]) if rows else ()
+    if header not in (CSV_COLUMNS, LEGACY_CSV_COLUMNS):
         raise ValueError(f"{path}: expected header {','.join(CSV_COLUMNS)}")
-    data = np.array(rows[1:], dtype=float).reshape(-1, len(CSV_COLUMNS))
-    out = {k: data[:, i] for i, k in enumerate(CSV_COLUMNS)}
-    out["piece"] = out["piece"].astype(int)
+    data = np.array(rows[1:], dtype=float).reshape(-1, len(header))
+    out = {k: data[:, i] for i, k in enumerate(header)}
+    for k in _INT_COLUMNS:
+        if k in out:
+            if not np.all(np.isfinite(out[k])) or np.any(out[k] != np.round(out[k])):
+                raise ValueError(f"{path}: column {k!r} must hold whole numbers")
+            out[k] = out[k].astype(int)
     return out
 
 

@@ -141,6 +141,9 @@ def load_traced(source: str | Path) -> TracedFigure:
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise SkatetraceError(f"cannot read the results in {result_path}: {type(exc).__name__} {exc}") from None
     labels = _section_rows(cols["t"], cols["piece"], sections, traced, starts, duration, controls_path)
+    if "section" in cols and not np.array_equal(cols["section"], labels):
+        raise SkatetraceError(f"{controls_path} does not match result.json: its section column is not the sections "
+                              "its times fall in; trace the figure again")
     try:
         schedule = ControlSchedule(t=cols["t"], a=cols["a"], b=cols["b"], adot=cols["adot"], bdot=cols["bdot"],
                                    section=labels, piece=cols["piece"])
