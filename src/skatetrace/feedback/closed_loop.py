@@ -138,8 +138,9 @@ class _Section:
 
     def rates(self, t: float, z: np.ndarray):
         if self.law is None:
-            _, u = self.ref.state_at(np.full(z.shape[1], t))
-            return u[0], u[1]
+            _, u = self.ref.state_at(t)  # one time for every trial
+            n = z.shape[1]
+            return np.broadcast_to(u[0], (n,)), np.broadcast_to(u[1], (n,))
         # a late measurement is compared with the reference at its own time
         ad, bd = self.law.rates(t, self.measured(t, z), max(t - self.plant.delay, 0.0))
         self.last = (ad, bd)

@@ -164,11 +164,11 @@ class TrackingLaw:
         (default ``tau``): the schedule's rates at ``tau`` minus the gain times the measured error."""
         ref = self.reference
         n = z.shape[1]
-        zr, ur = ref.state_at(np.broadcast_to(np.asarray(tau, dtype=float), (n,)))
+        zr, ur = _reference_at(ref, tau, n)
         tm = tau
         if measured_at is not None and np.any(np.asarray(measured_at) != np.asarray(tau)):
             tm = measured_at
-            zr, _ = ref.state_at(np.broadcast_to(np.asarray(tm, dtype=float), (n,)))
+            zr, _ = _reference_at(ref, tm, n)
         dz = z - zr
         dz[2] = (dz[2] + np.pi) % (2 * np.pi) - np.pi
         du = np.einsum("nij,jn->in", self.gain(tm, n), dz)
@@ -222,11 +222,21 @@ class TrackingLaw:
     def gain(self, tau, n: int = 1) -> np.ndarray:
         """``K`` at section times ``tau`` (linear between the rows), shape ``(n, 2, 7)``."""
         t = self.t
-        tq = np.clip(np.broadcast_to(np.asarray(tau, dtype=float), (n,)), t[0], t[-1])
+        tau = np.asarray(tau, dtype=float)
+        if tau.ndim == 0 and n > 1:  # one time for every trial: interpolate once
+            return np.broadcast_to(self.gain(tau, 1), (n, 2, 7))
+        tq = np.clip(np.broadcast_to(tau, (n,)), t[0], t[-1])
         j = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, t.size - 2)
         h = t[j + 1] - t[j]
         w = np.where(h > 0, (tq - t[j]) / np.where(h > 0, h, 1.0), 0.0)
         return (1 - w)[:, None, None] * self.K[j] + w[:, None, None] * self.K[j + 1]
+
+
+def _reference_at(ref: Reference, tau, n: int):
+    """The reference's state ``(7, n)`` and rates ``(2, n)`` at ``tau`` (or ``(7, 1)`` and ``(2, 1)``,
+    to broadcast, where ``tau`` is one time for every trial: evaluated once)."""
+    tau = np.asarray(tau, dtype=float)
+    return ref.state_at(tau if tau.ndim == 0 else np.broadcast_to(tau, (n,)))
 
 
 class _Stop(Exception):
