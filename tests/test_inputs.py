@@ -740,3 +740,50 @@ def test_random_point_lists_never_nan_never_a_crash(text, closed):
     for path in drawing.paths:
         for a, b in zip(path.pieces, path.pieces[1:]):
             np.testing.assert_allclose(a.end, b.start, rtol=1e-9, atol=CLOSE_TOL * drawing.size())
+
+
+# --- what an SVG draws: hidden and unpainted elements (issue 17) -----------------------------------------
+
+def _names(svg: str) -> list[str]:
+    return [p.name for p in read_svg(svg).paths]
+
+
+def test_an_icon_frame_that_paints_nothing_and_a_hidden_layer_are_not_traced():
+    svg = ('<svg xmlns="http://www.w3.org/2000/svg"><path id="frame" d="M0 0h24v24H0z" fill="none"/>'
+           '<g style="display:none"><path id="draft" d="M0 0 L 100 100"/></g>'
+           '<path id="arc" d="M2 12 C 6 2 18 2 22 12" stroke="black" fill="none"/></svg>')
+    drawing = read_svg(svg)
+    assert [p.name for p in drawing.paths] == ["arc"]
+    assert drawing.size() < 24  # the frame no longer sets the scale
+    assert any("paint nothing" in n and "frame" in n for n in drawing.notes)
+    assert any("hidden" in n and "draft" in n for n in drawing.notes)
+
+
+@pytest.mark.parametrize("attrs, drawn", [
+    ('fill="none" stroke="black"', True),
+    ('fill="none" style="stroke: none"', False),           # style wins over nothing; both none
+    ('fill="none" stroke="black" style="stroke:none"', False),  # style wins over the attribute
+    ('style="fill:none;stroke:#333"', True),
+    ("", True),                                           # SVG's default fill is black
+    ('fill="none" stroke="inherit"', False),              # inherits the root's (default) none
+])
+def test_paint_follows_style_over_attributes(attrs, drawn):
+    svg = (f'<svg xmlns="http://www.w3.org/2000/svg"><path id="p" d="M0 0 L 10 0" {attrs}/>'
+           '<path id="ref" d="M0 5 L 10 5" stroke="black"/></svg>')
+    assert ("p" in _names(svg)) is drawn
+
+
+def test_visibility_is_inherited_and_can_be_set_back():
+    svg = ('<svg xmlns="http://www.w3.org/2000/svg"><g visibility="hidden" stroke="black">'
+           '<path id="gone" d="M0 0 L 10 0"/><path id="back" d="M0 5 L 10 5" visibility="visible"/></g></svg>')
+    assert _names(svg) == ["back"]
+
+
+def test_a_drawing_where_nothing_is_painted_is_read_anyway_but_all_hidden_is_an_error():
+    plain = '<svg xmlns="http://www.w3.org/2000/svg"><path id="p" d="M0 0 L 10 0" fill="none"/></svg>'
+    drawing = read_svg(plain)
+    assert [p.name for p in drawing.paths] == ["p"] and any("nothing in the drawing is painted" in n
+                                                             for n in drawing.notes)
+    hidden = '<svg xmlns="http://www.w3.org/2000/svg"><path id="p" d="M0 0 L 10 0" style="display:none"/></svg>'
+    with pytest.raises(DrawingError, match="every drawable element .* is hidden"):
+        read_svg(hidden)

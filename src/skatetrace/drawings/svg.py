@@ -46,6 +46,7 @@ from svgpathtools.document import CONVERSIONS
 from .curves import BezierPiece, Drawing, EllipticArcPiece, LinePiece, Path, Piece
 from .files import file_stem, read_bytes, shorten
 from .lengths import CLOSE_TOL, MAX_COORD, extent
+from .svg_style import Visibility, visibility
 from ..errors import DrawingError
 
 __all__ = ["read_svg", "parse_path_string", "SVG_SUFFIXES"]
@@ -92,8 +93,10 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     ``circle``, ``ellipse``, ``line``, ``polyline`` and ``polygon``, inside the root and nested
     ``<g>`` groups, with every ``transform`` on the way. Not read: ``<use>`` clones, ``<symbol>``,
     nested ``<svg>``, ``<a>`` and ``<switch>`` containers, text, clip paths, ``<defs>`` (never
-    drawn by itself), CSS transforms, and ``display:none`` (hidden layers are read like visible
-    ones). An SVG without the SVG namespace declaration is read as if it had one. An invalid
+    drawn by itself), CSS transforms and ``<style>`` sheets. Elements hidden by ``display:none`` or
+    ``visibility:hidden`` (on them or inherited) are skipped, and so are elements that paint
+    nothing (fill and stroke ``none``: the invisible frames of icon sets) where anything else is
+    painted (:mod:`~skatetrace.drawings.svg_style`); ``notes`` lists what was skipped. An SVG without the SVG namespace declaration is read as if it had one. An invalid
     ``transform`` attribute is an error with svgpathtools 1.8 or later; older versions skip it
     with a warning, which goes into ``notes``.
 
@@ -136,12 +139,17 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     order = {id(element): k for k, element in enumerate(root.iter())}
     found.sort(key=lambda p: order.get(id(p.element), 0))
 
-    entries = []
+    parents = {child: parent for parent in root.iter() for child in parent}
+    entries, unpainted, hidden = [], [], []
     for k, svg_path in enumerate(found, start=1):
         element = svg_path.element
         tag = _local_tag(element.tag)
         label = f"<{tag} id={element.get('id')!r}>" if element.get("id") else f"<{tag}> number {k}"
         where = f"{origin}: {label}"
+        shown = visibility(element, parents)
+        if shown == Visibility.HIDDEN:
+            hidden.append(label)
+            continue
         try:
             d = CONVERSIONS[tag](element)
         except _LIBRARY_ERRORS as exc:
@@ -154,7 +162,20 @@ def read_svg(source: str | os.PathLike) -> Drawing:
         matrix = np.asarray(svg_path.transform if svg_path.transform is not None else np.eye(3), float)
         _check_transform(matrix, where)
         A, b = _FLIP @ matrix[:2, :2], _FLIP @ matrix[:2, 2]
-        entries.append((element.get("id") or f"{tag}-{k}", where, segments, A, b))
+        (entries if shown == Visibility.DRAWN else unpainted).append(
+            (element.get("id") or f"{tag}-{k}", where, segments, A, b))
+    if hidden:
+        notes.append(f"{origin}: skipped {len(hidden)} hidden element(s) (display:none or visibility:hidden): "
+                     f"{', '.join(hidden[:5])}{' ...' if len(hidden) > 5 else ''}")
+    if unpainted and entries:
+        notes.append(f"{origin}: skipped {len(unpainted)} element(s) that paint nothing (fill and stroke none): "
+                     f"{', '.join(u[1].split(': ', 1)[-1] for u in unpainted[:5])}{' ...' if len(unpainted) > 5 else ''}")
+    elif unpainted:
+        notes.append(f"{origin}: nothing in the drawing is painted (fill and stroke none); its geometry is read anyway")
+        entries = unpainted
+    if not entries and hidden:
+        raise DrawingError(f"every drawable element of {origin} is hidden (display:none or visibility:hidden): "
+                           f"{', '.join(hidden[:5])}")
     if not entries:
         hint = "" if _local_tag(root.tag) == "svg" else f" (the root element is <{_local_tag(root.tag)}>, not <svg>)"
         raise DrawingError(f"no paths found in {origin}{hint}: expected <path>, <rect>, <circle>, <ellipse>, "
