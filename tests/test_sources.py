@@ -208,3 +208,19 @@ def test_a_tiny_kink_becomes_a_corner_when_keeping_it_smooth_would_break_the_fit
     # a drawing the default threshold fits is left alone: no note, the same runs
     plain = resolve(str(EXAMPLES / "figure-eight.svg"), size="6m", tol="1mm")
     assert not any("made corners" in n for n in plain.notes)
+
+
+def test_paths_are_picked_by_id_or_subpath_name(tmp_path, capsys):
+    path = tmp_path / "two.svg"
+    path.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path id="a" d="M0 0 L 10 0 M 0 5 L 10 5" stroke="black"/>'
+                    '<path id="b" d="M0 20 C 5 10 10 30 15 20" stroke="black" fill="none"/></svg>')
+    assert [p.name for p in resolve(str(path), paths=["a"]).drawing.paths] == ["a#1", "a#2"]
+    assert [p.name for p in resolve(str(path), paths="a#2").drawing.paths] == ["a#2"]
+    both = resolve(str(path), paths=["b", "a#1"], size="6m", tol="1mm")
+    assert [p.name for p in both.drawing.paths] == ["a#1", "b"] and both.fit.success
+    with pytest.raises(SkatetraceError, match=r"no path named 'c' in 'two'; its paths are a, b"):
+        resolve(str(path), paths=["c"])
+    with pytest.raises(SkatetraceError, match="paths are picked from drawings"):
+        resolve("double-flower", paths=["a"])
+    assert main(["fit", str(path), "--path", "zz", "--out", str(tmp_path / "o")]) == 2
+    assert "no path named 'zz'" in capsys.readouterr().err

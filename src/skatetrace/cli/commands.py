@@ -34,6 +34,9 @@ def _add_source_args(t) -> None:
                                   "default: the drawing's own units")
     g.add_argument("--tol", help="fitting tolerance, a certified Hausdorff distance, e.g. 1mm or 1e-3 "
                                  "(figure units); default 1e-3 of the figure's size")
+    g.add_argument("--path", dest="paths", action="append", metavar="ID",
+                   help="trace only this path of the drawing: its SVG element's id (all its subpaths) or a "
+                        "subpath's name (ID#2); repeat to keep several (default: every drawn path)")
     g.add_argument("--fit", dest="method", choices=("greedy", "min"), default="greedy",
                    help="arc-spline fit: greedy subdivision or the minimum number of arcs (default greedy)")
     g.add_argument("--exact", nargs="?", const=True, default=None, metavar="TOL",
@@ -188,7 +191,7 @@ def _resolve(args, name: str):
 
     return resolve(name, size=args.size, tol=args.tol, method=args.method, height=args.height, blade=args.blade,
                    edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass,
-                   exact=args.exact)
+                   exact=args.exact, paths=getattr(args, "paths", None))
 
 
 def _exact_summary(res) -> dict | None:

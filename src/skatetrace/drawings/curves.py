@@ -13,7 +13,7 @@ return arrays of shape ``(2, len(t))``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -310,6 +310,25 @@ class Drawing:
     def size(self) -> float:
         x0, y0, x1, y1 = self.bbox()
         return max(x1 - x0, y1 - y0)
+
+    def selected(self, names) -> "Drawing":
+        """Only the paths named in ``names``: an element's ``id`` picks all its subpaths (``id``,
+        ``id#2``, ...), a subpath's own name (``id#2``) that one.
+
+        Raises
+        ------
+        ValueError
+            A name that matches no path (the message lists the names there are).
+        """
+        names = list(dict.fromkeys(str(n) for n in names))
+        keep = [p for p in self.paths if any(p.name == n or p.name.split("#", 1)[0] == n for n in names)]
+        missing = [n for n in names if not any(p.name == n or p.name.split("#", 1)[0] == n for p in self.paths)]
+        if missing:
+            there = sorted(dict.fromkeys(p.name.split("#", 1)[0] for p in self.paths))
+            raise ValueError(f"no path named {', '.join(map(repr, missing))} in {self.name!r}; its paths are "
+                             f"{', '.join(there[:20])}{' ...' if len(there) > 20 else ''}")
+        return replace(self, paths=tuple(keep), notes=(*self.notes, f"kept the paths {', '.join(names)} of "
+                                                                   f"{len(self.paths)}"))
 
     def scaled_to(self, size: float, unit: str | None = None) -> "Drawing":
         """Uniformly scaled about the bounding-box centre so that its larger side is ``size``, moved to the origin."""

@@ -146,7 +146,7 @@ def _tol(tol, unit: str, size: float, default: float = DEFAULT_REL_TOL, floor: f
 
 def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "greedy", height: float = 1.7,
             blade: float = 0.28, edge: str = "outside", direction: str = "forward", foot: str = "right",
-            body_mass: float = 60.0, exact=None) -> Resolved:
+            body_mass: float = 60.0, exact=None, paths=None) -> Resolved:
     """Turn a name, a file or a drawing into a figure to trace.
 
     Parameters
@@ -165,6 +165,9 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
         Drawings only: trace the smooth runs exactly, as curvature splines
         (:func:`skatetrace.drawings.exact.fit_exact_drawing`), within this distance (as ``tol``; ``True``:
         ``1e-7`` of the figure's size). ``None`` or ``False``: arcs and lines.
+    paths : sequence of str, optional
+        Drawings only: trace only these paths, by the ``id`` of their SVG element (all its subpaths)
+        or a subpath's name (``"id#2"``); see :meth:`~skatetrace.drawings.curves.Drawing.selected`.
     height, blade, edge, direction, foot : school figures (:func:`skatetrace.figures.school.school_figure`).
     body_mass : float
         kg, for the SI skater preset used with figures in metres.
@@ -178,8 +181,10 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
     from ..dynamics.presets import skater_params
 
     if isinstance(spec, Drawing):
-        return _drawing(spec, size, tol, method, body_mass, height, exact)
+        return _drawing(_pick(spec, paths), size, tol, method, body_mass, height, exact)
     name = str(spec)
+    if paths is not None and Path(name).suffix.lower() not in DRAWING_SUFFIXES:
+        raise SkatetraceError(f"paths are picked from drawings ({', '.join(DRAWING_SUFFIXES)}); {name!r} is not one")
     if name.startswith("school:"):
         from ..figures.school import school_figure
 
@@ -195,7 +200,7 @@ def resolve(spec: str | Path | Drawing, *, size=None, tol=None, method: str = "g
     if suffix in DRAWING_SUFFIXES:
         from .load import load_drawing
 
-        return _drawing(load_drawing(path), size, tol, method, body_mass, height, exact)
+        return _drawing(_pick(load_drawing(path), paths), size, tol, method, body_mass, height, exact)
     if suffix == ".json" or path.exists():
         return Resolved(figure=load_figure(path), kind="json", unit="model", notes=_exact_note(exact))
     raise SkatetraceError(
@@ -213,6 +218,17 @@ def _exact_note(exact) -> tuple[str, ...]:
     if exact is None or exact is False:
         return ()
     return ("exact mode applies to drawings; this figure's arcs, lines and spirals are traced as given",)
+
+
+def _pick(drawing: Drawing, paths) -> Drawing:
+    if paths is None:
+        return drawing
+    if isinstance(paths, str):
+        paths = [paths]
+    try:
+        return drawing.selected(paths)
+    except ValueError as exc:
+        raise SkatetraceError(str(exc)) from None
 
 
 def _kink_corner_deg(drawing: Drawing, tol: float) -> float:
