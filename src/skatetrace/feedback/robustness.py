@@ -42,7 +42,8 @@ SCHEMA = "skatetrace.robustness/1"
 MAX_TRIALS = 10_000
 #: Most Runge-Kutta steps a section may take (``steps``, or its duration over the delay).
 MAX_STEPS = 1_000_000
-#: Samples of one section times trials integrated at once (about 80 bytes each): larger studies run in batches.
+#: Samples of one section times trials integrated at once (about 140 bytes each, with what the controller saw):
+#: larger studies run in batches.
 MAX_SAMPLES = 2_000_000
 #: Trials whose blade paths are kept for drawing, and at most how many points of each section.
 PATH_TRIALS = 32
