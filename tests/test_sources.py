@@ -193,7 +193,7 @@ def test_cli_fit_shows_both_modes(tmp_path, capsys):
     assert any(p["type"] == "spiral" for c in data["figure"]["curves"] for p in c["pieces"])
 
 
-def test_a_tiny_kink_becomes_a_corner_when_keeping_it_smooth_would_break_the_fit(tmp_path, recwarn):
+def test_a_tiny_kink_becomes_a_corner_when_keeping_it_smooth_would_break_the_fit(tmp_path, recwarn, capsys):
     """Issue 17's reproducer: a 0.086 degree kink, below the 0.5 degree corner threshold. Kept smooth,
     it turns the rest of the line and the fit fails (bound 2.8 mm at 1 mm); chosen from the tolerance,
     it is a corner (a rest) and the fit is certified."""
@@ -205,6 +205,9 @@ def test_a_tiny_kink_becomes_a_corner_when_keeping_it_smooth_would_break_the_fit
     assert len(r.fit.paths[0].runs) == 2  # the kink split the path
     assert any("made corners (rests)" in n for n in r.notes)
     assert not [w for w in recwarn if "could not be fitted" in str(w.message)]  # the answered complaint is not shown
+    # 'fit' says so too
+    assert main(["fit", str(path), "--size", "6m", "--tol", "1mm", "--out", str(tmp_path / "o"), "--no-plots"]) == 0
+    assert "note: joins turning by more than" in capsys.readouterr().out
     # a drawing the default threshold fits is left alone: no note, the same runs
     plain = resolve(str(EXAMPLES / "figure-eight.svg"), size="6m", tol="1mm")
     assert not any("made corners" in n for n in plain.notes)

@@ -249,6 +249,8 @@ def _fit(args) -> int:
     out = Path(args.out)
     paths = _write_fit(res, out, not args.no_plots)
     fit = res.fit
+    for note in res.notes:
+        print(f"note: {note}")
     print(f"drawing {res.drawing.name}: {len(fit.paths)} path(s), {res.drawing.size():.4g} {res.unit} across")
     print(f"{'path':>4} {'name':>16} {'runs':>5} {'arcs':>5} {'lines':>6} {'greedy':>7} {'min':>5} "
           f"{'hausdorff':>10} {'where (x, y)':>22}")
