@@ -227,3 +227,39 @@ def test_paths_are_picked_by_id_or_subpath_name(tmp_path, capsys):
         resolve("double-flower", paths=["a"])
     assert main(["fit", str(path), "--path", "zz", "--out", str(tmp_path / "o")]) == 2
     assert "no path named 'zz'" in capsys.readouterr().err
+
+
+HEART = ('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><path d="M50 30 C 50 10, 90 10, 90 40 '
+         'C 90 60, 60 75, 50 90 C 40 75, 10 60, 10 40 C 10 10, 50 10, 50.01 30" fill="none" stroke="red"/></svg>')
+
+
+def test_a_drawing_whose_ends_miss_by_less_than_the_tolerance_is_closed_exactly(tmp_path):
+    """Issue 17: a heart whose ends miss by 0.75 mm at 6 m / 1 mm came back open."""
+    path = tmp_path / "heart.svg"
+    path.write_text(HEART)
+    r = resolve(str(path), size="6m", tol="1mm")
+    (pf,) = r.fit.paths
+    assert pf.closed and any("closed 1 path(s)" in n for n in r.notes)
+    # the bound is to the drawing as given: the fit's own distance plus the gap, within the tolerance
+    assert 7.4e-4 <= pf.hausdorff <= 1e-3 and r.fit.hausdorff == pf.hausdorff
+    closure = r.figure.curves[0].closure()
+    assert closure["closed"] and closure["position_gap"] <= 1e-12 * 6
+    # a looser drawing (a gap above the tolerance) stays open, and exact mode never closes
+    assert not resolve(str(path), size="6m", tol="0.5mm").fit.paths[0].closed
+    assert not any("closed 1 path" in n for n in resolve(str(path), size="6m", tol="1mm", exact=True).notes)
+
+
+def test_closing_moves_no_point_further_than_the_gap_and_keeps_the_end_tangent():
+    from skatetrace.drawings.curves import BezierPiece, Drawing, Path as DPath
+    arc = BezierPiece(((0.0, 0.0), (1.0, 2.0), (3.0, 2.0), (4.0, 0.0)))
+    back = BezierPiece(((4.0, 0.0), (3.0, -2.0), (1.0, -2.0), (0.003, 0.004)))  # misses the start by 0.005
+    drawing = Drawing((DPath((arc, back), False, "p"),))
+    closed, gaps = drawing.closed_within(0.01)
+    assert gaps == {"p": pytest.approx(0.005)}
+    (p,) = closed.paths
+    assert p.closed and np.allclose(p.pieces[-1].end, p.pieces[0].start, atol=1e-15)
+    t = np.linspace(0, 1, 401)
+    assert np.max(np.hypot(*(p.pieces[-1].point(t) - back.point(t)))) <= 0.005 + 1e-15
+    assert np.allclose(p.pieces[-1].d1(1.0), back.d1(1.0)) and np.allclose(p.pieces[-1].d2(1.0), back.d2(1.0))
+    assert np.allclose(p.pieces[-1].d1(0.0), back.d1(0.0))
+    assert drawing.closed_within(0.005)[1] == {}  # not closer than the gap: left open

@@ -22,7 +22,7 @@ _GL5 = np.polynomial.legendre.leggauss(5)
 
 __all__ = [
     "Piece", "LinePiece", "BezierPiece", "EllipticArcPiece", "FunctionPiece", "SplinePiece", "AffinePiece",
-    "Path", "Drawing", "curvature", "piece_length",
+    "ShiftedEndPiece", "Path", "Drawing", "curvature", "piece_length",
 ]
 
 
@@ -223,6 +223,28 @@ class AffinePiece(Piece):
         return np.asarray(self.A, float) @ self.base.d2(t)
 
 
+@dataclass(frozen=True, slots=True)
+class ShiftedEndPiece(Piece):
+    """``base`` with its end moved by ``delta`` and its start kept: ``base(t) + w(t) delta``, where
+    ``w = 10 t^3 - 15 t^4 + 6 t^5`` has zero slope and curvature at both ends, so the tangents and
+    curvatures there are the base's. No point moves by more than ``|delta|``."""
+
+    base: Piece
+    delta: tuple[float, float]
+
+    def _shift(self, t, w):
+        return np.outer(np.asarray(self.delta, float), w(_t(t)))
+
+    def point(self, t):
+        return self.base.point(t) + self._shift(t, lambda u: u**3 * (10.0 - 15.0 * u + 6.0 * u**2))
+
+    def d1(self, t):
+        return self.base.d1(t) + self._shift(t, lambda u: 30.0 * u**2 * (1.0 - u) ** 2)
+
+    def d2(self, t):
+        return self.base.d2(t) + self._shift(t, lambda u: 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u))
+
+
 def curvature(piece: Piece, t) -> np.ndarray:
     """Signed curvature ``(x' y'' - y' x'') / |r'|^3`` (positive turns left); NaN where ``r' = 0``."""
     d1, d2 = piece.d1(t), piece.d2(t)
@@ -329,6 +351,31 @@ class Drawing:
                              f"{', '.join(there[:20])}{' ...' if len(there) > 20 else ''}")
         return replace(self, paths=tuple(keep), notes=(*self.notes, f"kept the paths {', '.join(names)} of "
                                                                    f"{len(self.paths)}"))
+
+    def closed_within(self, gap: float) -> tuple["Drawing", dict[str, float]]:
+        """Every open path whose end is closer than ``gap`` to its start, closed exactly.
+
+        The last piece's end is moved onto the start (:class:`ShiftedEndPiece`: its tangent and
+        curvature at both ends unchanged), where that keeps its speed above half of its smallest;
+        no point of the drawing moves by more than the path's own gap, which is returned by name.
+        """
+        out, moved = [], {}
+        for p in self.paths:
+            last = p.pieces[-1]
+            delta = np.asarray(p.pieces[0].start, float) - np.asarray(last.end, float)
+            d = float(np.hypot(*delta))
+            if p.closed or not (0.0 < d < gap):
+                out.append(p)
+                continue
+            t = np.linspace(0.0, 1.0, 65)
+            speed = np.hypot(*last.d1(t))
+            shifted = ShiftedEndPiece(last, (float(delta[0]), float(delta[1])))
+            if np.min(np.hypot(*shifted.d1(t))) < 0.5 * np.min(speed):
+                out.append(p)
+                continue
+            out.append(Path((*p.pieces[:-1], shifted), True, p.name))
+            moved[p.name] = d
+        return (replace(self, paths=tuple(out)) if moved else self), moved
 
     def scaled_to(self, size: float, unit: str | None = None) -> "Drawing":
         """Uniformly scaled about the bounding-box centre so that its larger side is ``size``, moved to the origin."""

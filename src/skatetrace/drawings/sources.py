@@ -231,6 +231,21 @@ def _pick(drawing: Drawing, paths) -> Drawing:
         raise SkatetraceError(str(exc)) from None
 
 
+def _with_gaps(fit, gaps: dict[str, float], tol: float):
+    """The fit of paths closed by up to ``gaps`` (by name) with its bounds to the drawing as given:
+    each such path's distances plus its gap (no point of it moved further), and the tolerance ``tol``."""
+    if not gaps:
+        return fit
+    from dataclasses import replace
+
+    paths = tuple(replace(pf, hausdorff=pf.hausdorff + gaps.get(pf.name, 0.0),
+                          hausdorff_sampled=pf.hausdorff_sampled + gaps.get(pf.name, 0.0), tol=tol)
+                  for pf in fit.paths)
+    worst = max(range(len(paths)), key=lambda i: paths[i].hausdorff)
+    return replace(fit, paths=paths, hausdorff=paths[worst].hausdorff, worst_path=worst,
+                   hausdorff_sampled=max(pf.hausdorff_sampled for pf in paths))
+
+
 def _kink_corner_deg(drawing: Drawing, tol: float) -> float:
     """Smallest turn (degrees, at most ``EXACT_MAX_CORNER_DEG``) of a join that must be a corner.
 
@@ -258,15 +273,23 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     if value is None:
         _check_size(fsize, f"the drawing {drawing.name!r}, in its own units,")
     tol_v = _tol(tol, unit, fsize, floor=MIN_REL_TOL)
+    # In arc mode a path drawn closed but whose ends miss by less than the tolerance is closed
+    # exactly; the fit then gets what is left of the tolerance, and its bound is to the drawing as given.
+    fitted, gaps = drawing.closed_within(tol_v) if exact is None or exact is False else (drawing, {})
+    fit_tol = tol_v - max(gaps.values(), default=0.0)
+    if gaps:
+        notes.append(f"closed {len(gaps)} path(s) whose ends were within {tol_v:.3g} {unit} of their starts "
+                     f"(up to {max(gaps.values()):.3g}; the fit's bound includes it): "
+                     f"{', '.join(list(gaps)[:5])}{' ...' if len(gaps) > 5 else ''}")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        fit = fit_drawing(drawing, tol_v, method=method)
+        fit = fit_drawing(fitted, fit_tol, method=method)
     tight = _kink_corner_deg(drawing, tol_v)
     if not fit.success and tight < EXACT_MAX_CORNER_DEG:
         # The arc spline is tangent-continuous through a smooth join, so a join that turns by delta
         # displaces the rest of its run by about delta times its length: where that breaks the fit,
         # every join that could cost a tenth of the tolerance is made a corner (a rest) instead.
-        retry = fit_drawing(drawing, tol_v, method=method, corner_tol_deg=tight)
+        retry = fit_drawing(fitted, fit_tol, method=method, corner_tol_deg=tight)
         if retry.success:
             notes.append(f"joins turning by more than {tight:.2g} degrees made corners (rests): kept smooth, "
                          f"they moved the rest of their curve by more than the tolerance ({fit.message})")
@@ -275,6 +298,7 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if not fit.success:
         raise SkatetraceError(f"could not fit {drawing.name!r} within {tol_v:.3g}: {fit.message}")
+    fit = _with_gaps(fit, gaps, tol_v)
     params = skater_params(body_mass, height) if unit == "m" else SleighParams()
     notes.append(f"arc mode: {fit.n_arcs} arcs and {fit.n_lines} lines within {fit.hausdorff:.3g} "
                  f"(certified; tolerance {tol_v:.3g} {unit})")
