@@ -343,10 +343,17 @@ class Drawing:
             A name that matches no path (the message lists the names there are).
         """
         names = list(dict.fromkeys(str(n) for n in names))
-        keep = [p for p in self.paths if any(p.name == n or p.name.split("#", 1)[0] == n for n in names)]
-        missing = [n for n in names if not any(p.name == n or p.name.split("#", 1)[0] == n for p in self.paths)]
+
+        def element(p: Path) -> str:
+            return p.name.split("#", 1)[0]
+
+        def named(p: Path, n: str) -> bool:
+            return n in (p.name, element(p))
+
+        keep = [p for p in self.paths if any(named(p, n) for n in names)]
+        missing = [n for n in names if not any(named(p, n) for p in self.paths)]
         if missing:
-            there = sorted(dict.fromkeys(p.name.split("#", 1)[0] for p in self.paths))
+            there = sorted(dict.fromkeys(element(p) for p in self.paths))
             raise ValueError(f"no path named {', '.join(map(repr, missing))} in {self.name!r}; its paths are "
                              f"{', '.join(there[:20])}{' ...' if len(there) > 20 else ''}")
         return replace(self, paths=tuple(keep), notes=(*self.notes, f"kept the paths {', '.join(names)} of "

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .curves import Drawing
@@ -236,8 +236,6 @@ def _with_gaps(fit, gaps: dict[str, float], tol: float):
     each such path's distances plus its gap (no point of it moved further), and the tolerance ``tol``."""
     if not gaps:
         return fit
-    from dataclasses import replace
-
     paths = tuple(replace(pf, hausdorff=pf.hausdorff + gaps.get(pf.name, 0.0),
                           hausdorff_sampled=pf.hausdorff_sampled + gaps.get(pf.name, 0.0), tol=tol)
                   for pf in fit.paths)

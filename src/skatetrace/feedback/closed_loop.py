@@ -27,7 +27,7 @@ from ..dynamics.simulate import simulate
 from .lqr import TrackingLaw
 from .reference import Reference, rhs
 
-__all__ = ["Plant", "LoopRun", "loop_sections", "run_loop"]
+__all__ = ["Plant", "LoopRun", "loop_sections", "run_loop", "section_steps"]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -165,6 +165,12 @@ class _Section:
         return xi2, np.vstack([ad, bd])
 
 
+def section_steps(duration: float, steps: int, delay: float) -> int:
+    """Runge-Kutta steps over a section of ``duration``: ``steps``, or more so that no step is longer
+    than the ``delay`` (the delay line reads the recorded states)."""
+    return max(steps, int(math.ceil(duration / delay)) if delay > 0.0 else 0)
+
+
 def run_loop(refs: list[Reference | None], plant: Plant, laws: list[TrackingLaw | None] | None, *,
              steps: int = 4000, seed: int = 0) -> LoopRun:
     """Integrate every section of a figure for every trial.
@@ -201,7 +207,7 @@ def loop_sections(refs: list[Reference | None], plant: Plant, laws: list[Trackin
             prev_end = None
             continue
         T = ref.duration
-        count = max(steps, int(math.ceil(T / plant.delay)) if plant.delay > 0.0 else 0)
+        count = section_steps(T, steps, plant.delay)
         h = T / count
         ts, zs, rs, vs = np.empty(count + 1), np.empty((7, count + 1, n)), np.empty((2, count + 1, n)), \
             np.empty((count + 1, n))

@@ -30,9 +30,8 @@ import numpy as np
 from ..dynamics.model import SleighParams
 from ..figures.figure import Section
 from ..figures.geometry import distance_to_segment
-from .closed_loop import Plant, loop_sections
+from .closed_loop import Plant, loop_sections, section_steps
 from .lqr import ROBUST_RATE_WEIGHT, TrackingLaw, design, robust_gains
-from .reference import Reference
 
 __all__ = ["SCHEMA", "Perturbation", "default_perturbation", "perturbed_plant", "LoopOutcome", "RobustnessStatus",
            "RobustnessReport", "lqr_laws", "quantiles", "robustness"]
@@ -297,11 +296,6 @@ class _Tally:
         return LoopOutcome(deviation=self.deviation, cusp_speed=self.cusp_speed, paths=paths, seconds=seconds)
 
 
-def _section_steps(ref: Reference, steps: int, delay: float) -> int:
-    """The steps :func:`~skatetrace.feedback.closed_loop.run_loop` takes over ``ref`` (at most ``delay`` apart)."""
-    return max(steps, int(math.ceil(ref.duration / delay)) if delay > 0.0 else 0)
-
-
 def _replay(refs, sections, plant: Plant, laws, steps: int, batch: int, seed: int, tick) -> LoopOutcome:
     t0 = time.perf_counter()
     n = plant.trials
@@ -331,7 +325,7 @@ def _check(refs, sections, laws, size, steps, delay) -> None:
         raise ValueError(f"`size` (the figure's size) must be a positive finite number, got {size!r}")
     if isinstance(steps, bool) or not (isinstance(steps, (int, np.integer)) and 1 <= steps <= MAX_STEPS):
         raise ValueError(f"`steps` must be a whole number from 1 to {MAX_STEPS}, got {steps!r}")
-    for si, need in ((si, _section_steps(r, steps, delay)) for si, r in enumerate(refs) if r is not None):
+    for si, need in ((si, section_steps(r.duration, steps, delay)) for si, r in enumerate(refs) if r is not None):
         if need > MAX_STEPS:
             raise ValueError(f"a delay of {delay:g} needs {need:.3g} steps over section {si} (at most {MAX_STEPS}, "
                              "one step per delay): give a longer delay, or none")
@@ -391,7 +385,7 @@ def robustness(refs, sections, params: SleighParams, laws, perturbation: Perturb
         return RobustnessReport(success=False, status=nothing, message=nothing.value, open_loop=empty,
                                 closed_loop=empty, **common)
     plant = perturbed_plant(params, perturbation)
-    longest = max(_section_steps(r, steps, perturbation.delay) for r in refs if r is not None) + 1
+    longest = max(section_steps(r.duration, steps, perturbation.delay) for r in refs if r is not None) + 1
     batch = max(1, MAX_SAMPLES // longest)
     total, done = 2 * replayed * -(-perturbation.trials // batch), iter(range(1, 1 << 62))
     tick = (lambda: progress(next(done), total)) if progress is not None else (lambda: None)

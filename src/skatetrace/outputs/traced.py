@@ -7,9 +7,10 @@ the model's parameters, the figure's sections (its pieces laid out on the ice) a
 :class:`~skatetrace.feedback.reference.Reference` per traced section, built from the rows
 (:func:`~skatetrace.feedback.reference.references`).
 
-``controls.csv`` has no column for the section: its rows are told apart by time. A section's rows
-run from its start time to its end (the next section's start, or the figure's duration), the row
-at the end being its last; the next section's first row repeats that time.
+A section's rows are told apart by time, as files written before ``controls.csv`` had a
+``section`` column need: they run from its start time to its end (the next section's start, or the
+figure's duration), the row at the end being its last; the next section's first row repeats that
+time. Where the column is there, it must agree.
 """
 
 from __future__ import annotations
