@@ -150,8 +150,9 @@ def test_the_report_is_json_with_its_schema(study):
     assert data["perturbation"] == Perturbation(param_error=0.01, trials=2).to_dict()
     assert data["law"]["name"] == "lqr" and data["steps"] == 200
     for loop in ("open_loop", "closed_loop"):
-        assert set(data[loop]) == {"trials", "diverged", "max_deviation", "cusp_speed", "seconds"}
-        assert set(data[loop]["max_deviation"]) == set(data[loop]["cusp_speed"]) == {"p50", "p95", "max"}
+        assert set(data[loop]) == {"trials", "diverged", "max_deviation", "cusp_speed", "mass_reach", "seconds"}
+        assert set(data[loop]["max_deviation"]) == set(data[loop]["cusp_speed"]) == set(data[loop]["mass_reach"]) \
+            == {"p50", "p95", "max"}
         assert data[loop]["trials"] == 2
 
 
@@ -272,7 +273,8 @@ def test_the_command_prints_writes_and_draws(folder, capsys):
     assert main(["robustness", str(folder), "--trials", "3", "--steps", "200", "--param-error", "2%",
                  "--initial-error", "1e-3,0.2deg", "--delay", "0.005", "--noise", "1e-5"]) == 0
     out = capsys.readouterr().out
-    assert "open loop" in out and "closed loop" in out and "p95/size" in out
+    assert "open loop" in out and "closed loop" in out and "p95/size" in out and "mass reach" in out
+    assert "the trace studied: verified · not humanly feasible" in out  # both verdicts of what is studied
     data = json.loads((folder / "robustness.json").read_text())
     assert data["schema"] == "skatetrace.robustness/1" and data["unit"] == "model" and data["figure"] == "s-bend"
     assert data["perturbation"]["param_error"] == 0.02 and data["perturbation"]["delay"] == 0.005
@@ -327,6 +329,11 @@ def test_under_five_percent_parameter_error_the_law_holds_the_s_bend(study):
     diverges, and the blade stays several times closer to the figure (measured: p95 0.013 against 0.090)."""
     rep = _run(study, Perturbation(param_error=0.05, trials=12, seed=3), steps=300)
     assert rep.closed_loop.diverged == 0
+    # the open loop moves the mass exactly as the schedule does: its reach is the trace's own
+    traced = study[0]
+    planned = max(float(np.max(np.hypot(r.z[5], r.z[6]))) for r in traced.references)
+    assert np.all(np.abs(rep.open_loop.mass_reach - planned) <= 1e-6 * planned)
+    assert rep.to_dict()["closed_loop"]["mass_reach"]["max"] == pytest.approx(np.max(rep.closed_loop.mass_reach))
     open_p95 = quantiles(rep.open_loop.deviation)["p95"]
     closed_p95 = quantiles(rep.closed_loop.deviation)["p95"]
     assert closed_p95 < open_p95 / 3
@@ -346,3 +353,5 @@ def test_the_planned_circle_eight_survives_five_percent_parameter_error(tmp_path
     assert closed["diverged"] == 0
     assert closed["max_deviation"]["max"] < opened["max_deviation"]["p50"] / 5
     assert closed["max_deviation"]["max"] < 0.05 * data["figure_size"]
+    # and the skater's reach stays near the plan's 0.5 m (measured 0.516 m at most)
+    assert closed["mass_reach"]["max"] <= 0.6

@@ -79,6 +79,17 @@ def _describe(p, unit: str) -> str:
             f"delay {p.delay:.3g} {time_unit}; position noise {p.noise:.3g} {length}")
 
 
+def _trace_verdict(folder) -> str:
+    """Both verdicts of the trace in ``folder`` (verified, humanly feasible), from its ``report.json``."""
+    import json
+
+    try:
+        verdict = json.loads((folder / "report.json").read_text(encoding="utf-8")).get("verdict")
+    except (OSError, ValueError, AttributeError):
+        verdict = None
+    return verdict if isinstance(verdict, str) else "no verdict (report.json missing or unreadable)"
+
+
 def _table(report, unit: str) -> list[str]:
     from ..feedback.robustness import quantiles
 
@@ -86,12 +97,14 @@ def _table(report, unit: str) -> list[str]:
     lines = [f"largest deviation of each trial's blade from the figure ({length}), over the trials; blade speed "
              f"at the rests ({speed})",
              f"{'':12} {'p50':>9} {'p95':>9} {'max':>9} {'p95/size':>9} {'max/size':>9} {'diverged':>9} "
-             f"{'cusp speed':>11}"]
+             f"{'cusp speed':>11} {'mass reach':>11}"]
     for name, fam in (("open loop", report.open_loop), ("closed loop", report.closed_loop)):
         dev = quantiles(fam.deviation)
         cells = [dev["p50"], dev["p95"], dev["max"], dev["p95"] / report.figure_size, dev["max"] / report.figure_size]
         lines.append(f"{name:12} {' '.join(f'{_text(v):>9}' for v in cells)} {f'{fam.diverged}/{fam.trials}':>9} "
-                     f"{_text(quantiles(fam.cusp_speed)['max']):>11}")
+                     f"{_text(quantiles(fam.cusp_speed)['max']):>11} {_text(quantiles(fam.mass_reach)['max']):>11}")
+    lines.append(f"mass reach: the moving mass's largest distance from the blade ({length}), what a skater would "
+                 "have to reach in that loop")
     return lines
 
 
@@ -137,6 +150,7 @@ def run(args) -> int:
                       create_parent=False)
     print(f"robustness of {traced.name}: {traced.traced} of {len(traced.sections)} section(s) traced, figure "
           f"{traced.size:.4g} {'m' if traced.unit == 'm' else 'model units'} across")
+    print(f"the trace studied: {_trace_verdict(traced.folder)}")
     print(f"perturbation: {_describe(perturbation, traced.unit)}")
     t1 = time.perf_counter()
     laws, law = lqr_laws(traced.references, traced.params, traced.size, args.rate_weight)

@@ -188,12 +188,16 @@ class LoopOutcome:
         of the first ``m`` trials (at most :data:`PATH_TRIALS`), for drawing; NaN where not finite.
     seconds : float
         Wall time of the replays.
+    mass_reach : ndarray, shape (n,)
+        Largest distance of the moving mass from the blade's contact point, ``sqrt(a^2 + b^2)``
+        (figure units): what a skater would have to reach for this loop; ``inf``: diverged.
     """
 
     deviation: np.ndarray
     cusp_speed: np.ndarray
     paths: tuple
     seconds: float
+    mass_reach: np.ndarray | None = None
 
     @property
     def trials(self) -> int:
@@ -205,10 +209,12 @@ class LoopOutcome:
         return int(np.sum(~np.isfinite(self.deviation)))
 
     def to_dict(self) -> dict[str, Any]:
-        """``trials``, ``diverged``, ``max_deviation`` and ``cusp_speed`` (``{"p50", "p95", "max"}``, non-finite
-        as ``None``), ``seconds``."""
+        """``trials``, ``diverged``, ``max_deviation``, ``cusp_speed`` and ``mass_reach``
+        (``{"p50", "p95", "max"}``, non-finite as ``None``), ``seconds``."""
+        reach = self.mass_reach if self.mass_reach is not None else np.full(self.trials, np.nan)
         return {"trials": self.trials, "diverged": self.diverged, "max_deviation": _null(quantiles(self.deviation)),
-                "cusp_speed": _null(quantiles(self.cusp_speed)), "seconds": self.seconds}
+                "cusp_speed": _null(quantiles(self.cusp_speed)), "mass_reach": _null(quantiles(reach)),
+                "seconds": self.seconds}
 
 
 class RobustnessStatus(Enum):
@@ -269,6 +275,7 @@ class _Tally:
     def __init__(self, n: int, sections: int):
         self.deviation = np.zeros(n)
         self.cusp_speed = np.zeros(n)
+        self.mass_reach = np.zeros(n)
         self.paths: list[list[np.ndarray]] = [[] for _ in range(sections)]
 
     def add(self, si: int, section: Section, samples: dict, rows: slice) -> None:
@@ -282,7 +289,9 @@ class _Tally:
                 d = dp if d is None else np.minimum(d, dp)
             dev = np.where(finite, np.max(d.reshape(xy.shape[1:]), axis=0), np.inf)
             cusp = np.max(samples["cusp_speed"], axis=1)
+            reach = np.where(finite, np.max(np.hypot(*np.where(finite, state[5:7], 0.0)), axis=0), np.inf)
         cusp = np.where(finite & np.isfinite(cusp), cusp, np.inf)
+        self.mass_reach[rows] = np.maximum(self.mass_reach[rows], reach)
         self.deviation[rows] = np.maximum(self.deviation[rows], dev)
         self.cusp_speed[rows] = np.maximum(self.cusp_speed[rows], cusp)
         keep = max(0, min(rows.stop, PATH_TRIALS) - rows.start)
@@ -293,7 +302,8 @@ class _Tally:
 
     def outcome(self, seconds: float) -> LoopOutcome:
         paths = tuple(np.concatenate(p, axis=2) if p else None for p in self.paths)
-        return LoopOutcome(deviation=self.deviation, cusp_speed=self.cusp_speed, paths=paths, seconds=seconds)
+        return LoopOutcome(deviation=self.deviation, cusp_speed=self.cusp_speed, paths=paths, seconds=seconds,
+                           mass_reach=self.mass_reach)
 
 
 def _replay(refs, sections, plant: Plant, laws, steps: int, batch: int, seed: int, tick) -> LoopOutcome:
