@@ -8,6 +8,7 @@ import pytest
 from scipy.interpolate import CubicHermiteSpline
 
 from skatetrace.cli import main
+from skatetrace.outputs.results import read_controls
 
 
 def test_figures_lists_builtins(capsys):
@@ -417,6 +418,29 @@ def _arc_file(tmp_path):
 def test_trace_reach_that_cannot_apply_is_a_usage_error(tmp_path, capsys, reach, why):
     assert main(["trace", str(_arc_file(tmp_path)), "--reach", reach, "--out", str(tmp_path / "o")]) == 2
     assert why in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("given, unit, expected", [(None, "m", 0.288 * 1.8), (None, "model", None),
+                                                   ("none", "m", None), ("auto", "m", 0.288 * 1.8), ("0.4m", "m", 0.4),
+                                                   ("2", "model", 2.0)])
+def test_reach_defaults_to_the_skaters_in_metres_and_none_in_model_units(given, unit, expected):
+    """Issue 15: a figure in metres is a skater's figure, planned within a trunk's length unless told."""
+    import argparse
+
+    from skatetrace.cli.commands import _reach
+
+    got = _reach(argparse.Namespace(reach=given, height=1.8), unit)
+    assert got == (None if expected is None else pytest.approx(expected, rel=1e-3))
+
+
+def test_trace_in_metres_plans_within_the_skaters_reach_by_default(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["trace", "school:loop", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    assert "planning the mass's motion within 0.4896 m" in capsys.readouterr().out
+    result = json.loads((out / "result.json").read_text())
+    assert result["options"]["reach"] == pytest.approx(0.288 * 1.7)
+    rows = read_controls(out / "controls.csv")
+    assert np.max(np.hypot(rows["a"], rows["b"])) <= result["options"]["reach"]
 
 
 def test_trace_reach_plans_within_it_and_reports_the_cusps(tmp_path, capsys):

@@ -227,7 +227,7 @@ def test_a_school_loop_passes_close_to_the_singular_point(loop):
 # --------------------------------------------------------------------------------------------------
 def test_cli_warns_and_writes_both_verdicts(tmp_path, capsys):
     out = tmp_path / "three"
-    assert main(["trace", "school:three", "--height", "1.7", "--out", str(out), "--no-plots"]) == 0
+    assert main(["trace", "school:three", "--height", "1.7", "--reach", "none", "--out", str(out), "--no-plots"]) == 0
     cap = capsys.readouterr()
     assert "skatetrace: warning: verified · not humanly feasible: mass" in cap.err
     assert "m from the blade (limit 0.85 m)" in cap.err

@@ -252,6 +252,7 @@ def test_trace_passes_the_figure_unit_to_the_plots(tmp_path, monkeypatch, capsys
     svg = tmp_path / "circle.svg"
     svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><circle cx="50" cy="50" r="40"/>'
                    '</svg>')
-    main(["trace", str(svg), "--size", "4m", "--tol", "1mm", "--out", str(tmp_path / "o"), "--no-viewer"])
+    main(["trace", str(svg), "--size", "4m", "--tol", "1mm", "--reach", "none", "--out", str(tmp_path / "o"),
+          "--no-viewer"])
     assert seen == {"unit": "m"}
     assert (tmp_path / "o" / "fit.png").stat().st_size > 5000

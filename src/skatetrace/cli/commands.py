@@ -54,12 +54,12 @@ def _add_source_args(t) -> None:
 
 def _add_planner_args(t) -> None:
     g = t.add_argument_group("bounded-reach planning (controls a skater could make)")
-    g.add_argument("--reach", default="none",
+    g.add_argument("--reach", default=None,
                    help="keep the moving mass within this distance of the blade's contact point, e.g. 0.5m (or 0.5 "
                         "in the figure's units), and plan its motion (CasADi/IPOPT, then finished exactly; "
-                        "5 to 60 s for a school figure); 'auto' for figures in metres: "
-                        f"{REACH_PER_HEIGHT:g} x --height, the trunk's length; default none: the launch-glide-stop "
-                        "manoeuvres")
+                        "2 to 15 s for a school figure); 'auto': "
+                        f"{REACH_PER_HEIGHT:g} x --height, the trunk's length; 'none': the launch-glide-stop "
+                        "manoeuvres (no bound); default auto for figures in metres, none in model units")
     g.add_argument("--objective", choices=("effort", "time"), default="effort",
                    help="what the planner minimises: effort (the squared force on the mass, at the glide speed's "
                         "pace; default) or time (needs --max-accel)")
@@ -68,10 +68,14 @@ def _add_planner_args(t) -> None:
 
 
 def _reach(args, unit: str) -> float | None:
-    """``--reach`` in the figure's units: a length, ``auto`` (from ``--height``) or ``none``."""
+    """``--reach`` in the figure's units: a length, ``auto`` (from ``--height``) or ``none``.
+
+    Not given: ``auto`` for a figure in metres (a skater's figure: the answer should be one a
+    skater could make), ``none`` in model units (no skater to take a reach from).
+    """
     from ..dynamics.presets import skater_reach
 
-    word = args.reach.strip().lower()
+    word = ("auto" if unit == "m" else "none") if args.reach is None else args.reach.strip().lower()
     if word == "none":
         return None
     if word == "auto":
