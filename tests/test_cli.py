@@ -443,6 +443,29 @@ def test_trace_in_metres_plans_within_the_skaters_reach_by_default(tmp_path, cap
     assert np.max(np.hypot(rows["a"], rows["b"])) <= result["options"]["reach"]
 
 
+def test_a_default_reach_that_cannot_plan_falls_back_to_the_unbounded_trace(tmp_path, capsys, monkeypatch):
+    """Not asked for a plan, the user still gets the figure traced, and is told why it was not planned."""
+    import dataclasses
+
+    import skatetrace.pipeline as pipeline
+    from skatetrace.tracing.sections import TraceStatus, trace_figure
+
+    def no_plan(figure, params, options, progress=None):
+        tr = trace_figure(figure, params, dataclasses.replace(options, reach=None))
+        bad = dataclasses.replace(tr.sections[0], success=False, status=TraceStatus.INFEASIBLE, message="no plan here")
+        return dataclasses.replace(tr, sections=(bad,) + tr.sections[1:])
+
+    monkeypatch.setattr(pipeline, "plan_figure", no_plan)
+    out = tmp_path / "o"
+    assert main(["trace", "school:loop", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    printed = capsys.readouterr().out
+    assert "within the default reach 0.4896 m (no plan here); traced with the launch-glide-stop" in printed
+    assert json.loads((out / "result.json").read_text())["options"]["reach"] is None
+    # asked for, the reach is kept and its failure reported
+    assert main(["trace", "school:loop", "--reach", "auto", "--out", str(out), "--no-plots", "--no-viewer"]) == 1
+    assert "launch-glide-stop manoeuvres instead" not in capsys.readouterr().out
+
+
 def test_trace_reach_plans_within_it_and_reports_the_cusps(tmp_path, capsys):
     out = tmp_path / "o"
     assert main(["trace", str(_arc_file(tmp_path)), "--reach", "1", "--out", str(out), "--no-plots",

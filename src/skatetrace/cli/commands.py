@@ -8,6 +8,7 @@ unreadable or malformed figure file).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -314,6 +315,27 @@ def _compile_once() -> None:
     print(f"  compiled in {seconds:.0f} s", file=sys.stderr, flush=True)
 
 
+def _unplanned_if_better(done, figure, params, options, args, limits, progress):
+    """Where the default reach (not asked for) left sections unplanned, the launch-glide-stop
+    manoeuvres instead if they trace every section: the user asked for a trace, not a plan.
+
+    Says so, with the planner's first failure; keeps the plan (and its failures) otherwise.
+    """
+    from ..pipeline import trace_and_verify
+
+    failed = next(s for s in done.trace.sections if not s.success)
+    unbounded = dataclasses.replace(options, reach=None)
+    again = trace_and_verify(figure, params, unbounded, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
+                             progress=progress)
+    print(file=sys.stderr)
+    if not all(s.success for s in again.trace.sections):
+        return done, options
+    print(f"note: not every section could be planned within the default reach {options.reach:.4g} m "
+          f"({failed.message}); traced with the launch-glide-stop manoeuvres instead (as --reach none). "
+          f"Give --reach to see the plan and its failures")
+    return again, unbounded
+
+
 def _trace(args) -> int:
     from ..outputs.results import write_results
     from ..pipeline import trace_and_verify
@@ -341,6 +363,8 @@ def _trace(args) -> int:
     done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
                             progress=progress)
     print(file=sys.stderr)
+    if args.reach is None and options.reach is not None and not all(s.success for s in done.trace.sections):
+        done, options = _unplanned_if_better(done, figure, params, options, args, limits, progress)
     figure, trace, schedule, states, report = done.figure, done.trace, done.schedule, done.states, done.report
     if done.rests:
         where = ", ".join(f"before piece {pi}" + (f" of curve {ci}" if len(figure.curves) > 1 else "")
