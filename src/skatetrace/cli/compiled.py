@@ -1,7 +1,8 @@
 """The compiled numerical core: is numba's on-disk cache of it ready, and compiling it ahead of a run.
 
-The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`) and
-the distance checks of :mod:`skatetrace.verification.verify` are compiled by numba with ``cache=True``: the first
+The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`)
+and the closed-loop replay (:mod:`skatetrace.feedback.law_replay`), and the distance checks of
+:mod:`skatetrace.verification.verify` are compiled by numba with ``cache=True``: the first
 run on a machine compiles them (10-20 s, depending on the machine) and writes the machine code to
 numba's cache (the ``__pycache__`` folders beside the sources, or, where those cannot be written,
 numba's folder in the user's cache directory, or ``NUMBA_CACHE_DIR``); every later run loads it in
@@ -27,6 +28,7 @@ __all__ = ["ENTRY_POINTS", "cache_is_warm", "warm_up"]
 ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
     ("the manoeuvre integrator", (("skatetrace.dynamics.integrator", "_run"), ("skatetrace.dynamics.integrator", "_evaluate_steps"))),
     ("the verifying replay", (("skatetrace.dynamics.replayer", "_run"),)),
+    ("the closed-loop replay", (("skatetrace.feedback.law_replay", "_run"),)),
     ("the distance checks", (("skatetrace.verification.verify", "_golden_distances"), ("skatetrace.verification.verify", "_hermite_distance"))),
 )
 
@@ -110,8 +112,24 @@ def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
         from ..pipeline import trace_and_verify
         from ..tracing.sections import TraceOptions
 
-        trace_and_verify(pattern("circle"), options=TraceOptions())
+        _replay_under_a_law(trace_and_verify(pattern("circle"), options=TraceOptions()).trace)
     finally:
         if listener is not None:
             event.unregister("numba:compile", listener)
     return time.perf_counter() - start
+
+
+def _replay_under_a_law(trace) -> None:
+    """Compile the closed-loop replay, which verification reaches only on an ill-conditioned section:
+    a replay of ``trace``'s first section under a law of zero gains (its types are every law's)."""
+    import numpy as np
+
+    from ..feedback.closed_loop import replay_law
+    from ..feedback.lqr import TrackingLaw
+    from ..feedback.reference import section_reference
+
+    if not (trace.sections and trace.sections[0].success):
+        return
+    ref = section_reference(trace.sections[0], trace.params, points=8, max_points=8)
+    law = TrackingLaw(reference=ref, t=ref.grid, K=np.zeros((ref.grid.size, 2, 7)), params=trace.params)
+    replay_law(ref, law, trace.params, ref.state_at(0.0)[0][:, 0], [0.0, ref.duration])

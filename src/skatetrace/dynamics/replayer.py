@@ -8,8 +8,9 @@ compiled:
 - the controls are the schedule's cubic Hermite interpolants (:meth:`ControlSchedule.hermite`,
   the same coefficients :func:`skatetrace.dynamics.simulate.simulate` uses);
 - the velocities are :func:`skatetrace.dynamics.model.body_velocities` itself, compiled, not a copy;
-- the step is scipy's DOP853 (the arithmetic in :mod:`skatetrace.dynamics.dop853`), with the same error
-  norm, step-size control, initial step and 7th-order dense output at the requested times.
+- the step is scipy's DOP853 (the loop :func:`skatetrace.dynamics.dop853.integrate`, which the
+  tracking law's replay shares), with the same error norm, step-size control, initial step and
+  7th-order dense output at the requested times.
 
 The right-hand side knows nothing of curvatures, manoeuvres or how the controls were found: it is
 the free motion of the sleigh and its mass under the given ``a(t), b(t)``. It shares only the
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -29,17 +31,45 @@ from . import dop853 as rk
 from .controls import ControlSchedule
 from .model import SleighParams, body_velocities
 
-__all__ = ["ChunkReplay", "replay_chunk"]
+__all__ = ["ChunkReplay", "interval", "replay_chunk", "sleigh_rhs"]
 
 _body_velocities = njit(cache=True)(body_velocities)
 
-_REACHED, _EXHAUSTED, _SMALL_STEP, _NONFINITE = 0, -1, -2, -3
 _MESSAGES = {
-    _REACHED: "integrated to the end of the chunk",
-    _EXHAUSTED: "step size collapsed: the evaluation budget ran out (the controls or the motion are singular)",
-    _SMALL_STEP: "required step size is less than spacing between numbers",
-    _NONFINITE: "the state became non-finite",
+    rk.REACHED: "integrated to the end of the chunk",
+    rk.EXHAUSTED: "step size collapsed: the evaluation budget ran out (the controls or the motion are singular)",
+    rk.SMALL_STEP: "required step size is less than spacing between numbers",
+    rk.NONFINITE: "the state became non-finite",
 }
+
+
+class _Schedule(NamedTuple):
+    """What the open-loop right-hand side reads (:func:`skatetrace.dynamics.dop853.rhs`): the parameters,
+    the controls' Hermite cubics and ``ctl``, its scratch (see :func:`_controls`)."""
+
+    M: float
+    m: float
+    I: float
+    knots: np.ndarray
+    ca: np.ndarray
+    cb: np.ndarray
+    ctl: np.ndarray
+
+
+@njit(cache=True)
+def interval(knots, t, k):
+    """The interval of ``t`` among the sorted ``knots``: the last ``k`` with ``knots[k] <= t``, at most
+    ``knots.size - 2`` and at least 0 (``np.searchsorted(knots, t, side="right") - 1``, clipped).
+
+    A short walk from ``k``, the interval last used: integration moves forwards. Right of a repeated
+    knot (a jump), so a time at a jump is in the interval that starts there.
+    """
+    last = knots.size - 2
+    while k < last and t >= knots[k + 1]:
+        k += 1
+    while k > 0 and t < knots[k]:
+        k -= 1
+    return k
 
 
 @njit(cache=True)
@@ -48,13 +78,7 @@ def _controls(knots, ca, cb, t, ctl):
 
     They go to ``ctl[:4]``; ``ctl[4]`` holds the index of the interval last used.
     """
-    # the interval of t: a short walk from the last one (the integration moves forwards)
-    k = int(ctl[4])
-    last = knots.size - 2
-    while k < last and t >= knots[k + 1]:
-        k += 1
-    while k > 0 and t < knots[k]:
-        k -= 1
+    k = interval(knots, t, int(ctl[4]))
     ctl[4] = k
     h = t - knots[k]
     ctl[0] = ((ca[k, 0] * h + ca[k, 1]) * h + ca[k, 2]) * h + ca[k, 3]
@@ -76,10 +100,10 @@ def _controls_at(knots, ca, cb, t_out):
 
 
 @njit(cache=True)
-def _rhs(M, m, I, knots, ca, cb, t, y, out, ctl):
-    """Eqs. (p1_eq)-(y_eq) for the state ``(p1, p2, theta, x, y)``."""
-    _controls(knots, ca, cb, t, ctl)
-    xi1, xi2, eta = _body_velocities(M, m, I, y[0], y[1], ctl[0], ctl[1], ctl[2], ctl[3])
+def sleigh_rhs(M, m, I, y, a, b, adot, bdot, out):
+    """Eqs. (p1_eq)-(y_eq): ``d(p1, p2, theta, x, y)/dt`` into ``out[:5]`` for the state ``y[:5]``
+    under the mass motion ``(a, b, adot, bdot)``."""
+    xi1, xi2, eta = _body_velocities(M, m, I, y[0], y[1], a, b, adot, bdot)
     out[0] = -m * eta * xi2
     out[1] = m * eta * xi1
     out[2] = xi1
@@ -87,97 +111,26 @@ def _rhs(M, m, I, knots, ca, cb, t, y, out, ctl):
     out[4] = xi2 * math.sin(y[2])
 
 
+@njit(cache=True, inline="always")
+def _rhs(data, t, y, out):
+    """The five equations under the schedule's controls at ``t``."""
+    ctl = data.ctl
+    _controls(data.knots, data.ca, data.cb, t, ctl)
+    sleigh_rhs(data.M, data.m, data.I, y, ctl[0], ctl[1], ctl[2], ctl[3], out)
+
+
+rk.register(_Schedule, _rhs)
+
+
 @njit(cache=True)
 def _run(M, m, I, y0, knots, ca, cb, t_out, rtol, atol, max_nfev):
     """Integrate from ``knots[0]`` to ``knots[-1]``; states at the sorted times ``t_out``.
 
-    Returns ``(status, t, y, out, nfev, nsteps)``; ``out`` is NaN at the times not reached.
+    Returns ``(status, t, y, out, nfev, nsteps)``; ``out`` is NaN at the times not reached
+    (:func:`skatetrace.dynamics.dop853.integrate`).
     """
-    n = y0.size
-    nout = t_out.size
-    out = np.full((n, nout), np.nan)
-    t = knots[0]
-    t_end = knots[-1]
-    y = y0.copy()
-    ctl = np.zeros(5)
-    j = 0
-    while j < nout and t_out[j] <= t:
-        for r in range(n):
-            out[r, j] = y[r]
-        j += 1
-    f = np.empty(n)
-    f_new = np.empty(n)
-    ynew = np.empty(n)
-    ytmp = np.empty(n)
-    Kx = np.empty((16, n))
-    F = np.empty((rk.POWER, n))
-    _rhs(M, m, I, knots, ca, cb, t, y, f, ctl)
-    h0, d1, scale = rk.initial_step_trial(y, f, t_end - t, rtol, atol)
-    _rhs(M, m, I, knots, ca, cb, t + h0, y + h0 * f, f_new, ctl)
-    h_abs = rk.initial_step(h0, d1, scale, f, f_new, t_end - t)
-    nfev = 2
-    nsteps = 0
-    while t < t_end:
-        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
-        h_abs = max(h_abs, min_step)
-        rejected = False
-        while True:
-            if h_abs < min_step:
-                return _SMALL_STEP, t, y, out, nfev, nsteps
-            t_new = min(t + h_abs, t_end)
-            h = t_new - t
-            h_abs = h
-            for i in range(n):
-                Kx[0, i] = f[i]
-            for s in range(1, rk.N_STAGES):
-                for i in range(n):
-                    acc = 0.0
-                    for q in range(s):
-                        acc += rk.A[s, q] * Kx[q, i]
-                    ytmp[i] = y[i] + acc * h
-                _rhs(M, m, I, knots, ca, cb, t + rk.C[s] * h, ytmp, Kx[s], ctl)
-            for i in range(n):
-                acc = 0.0
-                for q in range(rk.N_STAGES):
-                    acc += rk.B[q] * Kx[q, i]
-                ynew[i] = y[i] + h * acc
-            _rhs(M, m, I, knots, ca, cb, t_new, ynew, f_new, ctl)
-            for i in range(n):
-                Kx[rk.N_STAGES, i] = f_new[i]
-            nfev += rk.N_STAGES
-            if nfev > max_nfev:
-                return _EXHAUSTED, t, y, out, nfev, nsteps
-            err = rk.error_norm(Kx[:rk.N_STAGES + 1], y, ynew, h_abs, rtol, atol)
-            h_abs *= rk.step_factor(err, rejected)
-            if err < 1.0:
-                break
-            rejected = True
-        if not math.isfinite(ynew[0] + ynew[1] + ynew[2] + ynew[3] + ynew[4]):
-            return _NONFINITE, t, y, out, nfev, nsteps
-        nsteps += 1
-        if j < nout and t_out[j] <= t_new:
-            # the three extra stages of the 7th-order interpolant, only on steps with output
-            for s in range(rk.N_STAGES + 1, 16):
-                for i in range(n):
-                    acc = 0.0
-                    for q in range(s):
-                        acc += rk.A_EXTRA[s - rk.N_STAGES - 1, q] * Kx[q, i]
-                    ytmp[i] = y[i] + acc * h
-                _rhs(M, m, I, knots, ca, cb, t + rk.C_EXTRA[s - rk.N_STAGES - 1] * h, ytmp, Kx[s], ctl)
-            nfev += 3
-            rk.dense_coefficients(Kx, h, y, ynew, f_new, F)
-            while j < nout and t_out[j] <= t_new:
-                if t_out[j] == t_new:
-                    for r in range(n):
-                        out[r, j] = ynew[r]
-                else:
-                    rk.interpolate_into(t, h, y, F, t_out[j], out[:, j])
-                j += 1
-        t = t_new
-        for i in range(n):
-            y[i] = ynew[i]
-            f[i] = f_new[i]
-    return _REACHED, t, y, out, nfev, nsteps
+    data = _Schedule(M, m, I, knots, ca, cb, np.zeros(5))
+    return rk.integrate(data, y0, knots[0], knots[-1], t_out, rtol, atol, max_nfev)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..dynamics.model import SleighParams, body_velocities, momenta
 from ..dynamics.simulate import simulate
+from .law_replay import SpanRun, law_arrays, replay_span
 from .lqr import TrackingLaw
 from .reference import Reference, rhs
 
@@ -229,7 +230,7 @@ def loop_sections(refs: list[Reference | None], plant: Plant, laws: list[Trackin
 
 
 def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out, *, rtol: float = 1e-12,
-               atol: float = 1e-14, max_nfev: int = 300_000):
+               atol: float = 1e-14, max_nfev: int = 300_000, engine: str = "compiled"):
     """One sleigh (the model itself) under the law, integrated accurately: DOP853 between the rate jumps.
 
     Parameters
@@ -243,6 +244,11 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
     max_nfev : int
         Budget of evaluations of the law over the whole section; beyond it the replay stops and
         reports ``success=False``.
+    engine : {"compiled", "scipy"}
+        ``"compiled"`` (default) integrates with :func:`skatetrace.feedback.law_replay.replay_span`;
+        ``"scipy"`` with :func:`skatetrace.dynamics.simulate.simulate` (``solve_ivp``) and the law's
+        :meth:`~skatetrace.feedback.lqr.TrackingLaw.controller`, some two hundred times slower, as a
+        cross-check of the first. The two take the same steps, up to rounding.
 
     Returns
     -------
@@ -253,27 +259,42 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
         The largest feedback term ``|K (z - z_ref)|`` met at ``t_out``, relative to the section's
         fastest scheduled rate: how far the law had to depart from the schedule.
     success : bool
-        False if an integration failed (the states from there on are NaN).
+        False if an integration failed (the states from there on are NaN: from the failure with
+        the compiled engine, from the start of the span that failed with scipy's).
     """
+    if engine not in ("compiled", "scipy"):
+        raise ValueError(f"engine must be 'compiled' or 'scipy', got {engine!r}")
     t_out = np.asarray(t_out, dtype=float)
     end = ref.duration
     scale = np.maximum(np.max(np.abs(ref.z), axis=1), 1e-300) * atol
-    controller = law.controller()
+    if engine == "compiled":
+        arrays = law_arrays(ref, law)
+
+        def span_run(z, c0, c1, tt, budget):
+            return replay_span(arrays, params, z, (c0, c1), tt, rtol=rtol, atol=scale, max_nfev=budget)
+    else:
+        controller = law.controller()
+
+        def span_run(z, c0, c1, tt, budget):
+            # a jump of the rates at c0: the law is read from the right there (just inside the span)
+            run = simulate(params, z, controller, (c0, c1), rtol=rtol, atol=scale, max_nfev=budget)
+            states = run(tt) if run.success else np.full((7, tt.size), np.nan)
+            return SpanRun(success=run.success, y_end=run.state[:, -1] if run.success else None, states=states,
+                           nfev=run.nfev)
+
     states = np.full((7, t_out.size), np.nan)
     z = np.asarray(z0, dtype=float)
     ok = True
     budget = max_nfev
     for c0, c1 in ref.spans():
-        # a jump of the rates at c0: the law is read from the right there (just inside the span)
-        run = simulate(params, z, controller, (c0, c1), rtol=rtol, atol=scale, max_nfev=budget)
+        inside = (t_out >= c0) & ((t_out < c1) | (c1 == end) & (t_out <= c1))
+        run = span_run(z, c0, c1, t_out[inside], budget)
         budget -= run.nfev
+        states[:, inside] = run.states
         if not run.success:
             ok = False
             break
-        inside = (t_out >= c0) & ((t_out < c1) | (c1 == end) & (t_out <= c1))
-        if np.any(inside):
-            states[:, inside] = run(t_out[inside])
-        z = run.state[:, -1]
+        z = run.y_end
     ur = ref.state_at(t_out)[1]
     finite = np.all(np.isfinite(states), axis=0)
     rates = np.full((2, t_out.size), np.nan)
