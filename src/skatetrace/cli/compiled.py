@@ -1,12 +1,12 @@
 """The compiled numerical core: is numba's on-disk cache of it ready, and compiling it ahead of a run.
 
 The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`)
-and the closed-loop replay (:mod:`skatetrace.feedback.law_replay`), and the distance checks of
-:mod:`skatetrace.verification.verify` are compiled by numba with ``cache=True``: the first
-run on a machine compiles them (10-20 s, depending on the machine) and writes the machine code to
-numba's cache (the ``__pycache__`` folders beside the sources, or, where those cannot be written,
-numba's folder in the user's cache directory, or ``NUMBA_CACHE_DIR``); every later run loads it in
-a fraction of a second.
+and the closed-loop replay (:mod:`skatetrace.feedback.law_replay`), the distance checks of
+:mod:`skatetrace.verification.verify` and the planner's exact finish (:mod:`skatetrace.planning.shooting`)
+are compiled by numba with ``cache=True``: the first run on a machine compiles them (10-30 s,
+depending on the machine) and writes the machine code to numba's cache (the ``__pycache__`` folders
+beside the sources, or, where those cannot be written, numba's folder in the user's cache directory,
+or ``NUMBA_CACHE_DIR``); every later run loads it in a fraction of a second.
 The cache is keyed by the source file's time stamp and size, the function's bytecode and the CPU, so
 it is rebuilt after an upgrade or on another machine, never reused wrongly.
 
@@ -30,6 +30,9 @@ ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
     ("the verifying replay", (("skatetrace.dynamics.replayer", "_run"),)),
     ("the closed-loop replay", (("skatetrace.feedback.law_replay", "_run"),)),
     ("the distance checks", (("skatetrace.verification.verify", "_golden_distances"), ("skatetrace.verification.verify", "_hermite_distance"))),
+    ("the planner's exact finish", (("skatetrace.planning.shooting", "legs_from"),
+                                    ("skatetrace.planning.shooting", "segment_ends"),
+                                    ("skatetrace.planning.shooting", "jacobian_columns"))),
 )
 
 
@@ -59,7 +62,7 @@ def cache_is_warm() -> bool | None:
     -------
     bool or None
         ``True``: every entry point is cached for this machine (or already compiled in this process);
-        ``False``: some part would be compiled (10-20 s in all); ``None``: cannot tell (numba's cache
+        ``False``: some part would be compiled (10-30 s in all); ``None``: cannot tell (numba's cache
         internals changed, or JIT compilation is disabled with ``NUMBA_DISABLE_JIT=1``).
     """
     try:
@@ -113,6 +116,7 @@ def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
         from ..tracing.sections import TraceOptions
 
         _replay_under_a_law(trace_and_verify(pattern("circle"), options=TraceOptions()).trace)
+        _finish_at_rest()
     finally:
         if listener is not None:
             event.unregister("numba:compile", listener)
@@ -133,3 +137,20 @@ def _replay_under_a_law(trace) -> None:
     ref = section_reference(trace.sections[0], trace.params, points=8, max_points=8)
     law = TrackingLaw(reference=ref, t=ref.grid, K=np.zeros((ref.grid.size, 2, 7)), params=trace.params)
     replay_law(ref, law, trace.params, ref.state_at(0.0)[0][:, 0], [0.0, ref.duration])
+
+
+def _finish_at_rest() -> None:
+    """Compile the planner's exact finish (:mod:`skatetrace.planning.shooting`), which a trace without a reach
+    never runs: one Gauss-Newton iteration on a section at rest on a line (converged or not: its types are
+    every section's)."""
+    import numpy as np
+
+    from ..dynamics.model import SleighParams
+    from ..figures.geometry import Spiral
+    from ..planning.finish import RestState, finish_section
+
+    rest = RestState(0.0, -0.3, 0.0, 0.0)
+    states = np.zeros((6, 5))
+    states[3] = rest.b
+    finish_section(SleighParams(), [Spiral((0.0, 0.0, 0.0, 0.0), 1.0)], np.linspace(0.0, 1.0, 5), np.zeros(5), rest,
+                   rest, states, max_iter=1)

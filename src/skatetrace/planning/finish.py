@@ -3,12 +3,15 @@
 The collocation answer (:mod:`skatetrace.planning.collocation`) satisfies the dynamics only to
 its mesh's accuracy. Here its free control ``u`` (piecewise linear in time) is integrated by the
 compiled DOP853 of the manoeuvres, one affine piece per call, so that the curvature condition
-holds by construction to the integrator's tolerance, and six numbers are solved for by MINPACK's
-hybrid method: a scale of the time nodes and five coefficients of a correction
-``sum_i e_i sin(i pi t / 2T)`` of ``u`` (zero at the start, which stays at rest exactly). The
-residuals pin the end state: the arc length, the mass's position ``(a, b)`` and rates
-``(adot, bdot)`` as planned, and the speed along the blade zero (rest). The next section then
-starts from that position (and velocity, where the plan makes it continuous), exactly.
+holds by construction to the integrator's tolerance, and the section is solved by multiple
+shooting (:func:`finish_section`): the unknowns are a scale of the time nodes, ``u`` at the nodes
+and the states at the inner segment starts; the residuals the continuity between segments and
+the end state: the arc length, the mass's position ``(a, b)`` and rates ``(adot, bdot)`` as
+planned, and the speed along the blade zero (rest). The next section then starts from that
+position (and velocity, where the plan makes it continuous), exactly.
+
+The residuals' and the Jacobian's integrations run compiled (:mod:`skatetrace.planning.shooting`);
+the solution's phases (dense output) are integrated once more here, interval by interval.
 """
 
 from __future__ import annotations
@@ -18,12 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-from scipy.optimize import root
 
 from ..dynamics.integrator import integrate_legs
 from ..dynamics.model import SleighParams, velocities
-from ..figures.geometry import shifted_polynomial
 from ..tracing.maneuver import Leg, ManeuverSolution, constrained_rates
+from .shooting import jacobian_columns, legs_from, segment_ends
 
 __all__ = ["RestState", "FinishedSection", "finish_section", "rest_momenta"]
 
@@ -67,30 +69,23 @@ def rest_momenta(params: SleighParams, a, b, adot, bdot) -> tuple[float, float]:
 
 
 def _pieces(pieces):
-    """Cumulative ends and curvature coefficients of the section's pieces."""
+    """Cumulative ends and curvature coefficients (an array of shape (n, 4)) of the section's pieces."""
     ends = np.cumsum([p.length for p in pieces])
-    return ends, [tuple(p.coefficients) for p in pieces]
+    return ends, np.array([tuple(p.coefficients) for p in pieces], dtype=float).reshape(-1, 4)
 
 
 def _legs_from(ends, coeffs, s_cur):
-    """Legs ``(coefficients, switch)`` from arc length ``s_cur`` on, with lengths measured from there."""
-    j = int(np.searchsorted(ends, s_cur, side="right"))
-    j = min(j, len(ends) - 1)
-    start_j = ends[j - 1] if j else 0.0
-    kap = [shifted_polynomial(coeffs[j], max(s_cur - start_j, 0.0), 1.0)]
-    sw = [ends[j] - s_cur]
-    for i in range(j + 1, len(ends)):
-        kap.append(coeffs[i])
-        sw.append(ends[i] - s_cur)
-    sw[-1] = math.inf
-    return j, np.array(kap, dtype=float).reshape(-1, 4), np.array(sw, dtype=float)
+    """Legs ``(coefficients, switch)`` from arc length ``s_cur`` on: :func:`~skatetrace.planning.shooting.legs_from`."""
+    j, kap, sw = legs_from(ends, coeffs, s_cur)
+    return int(j), kap, sw
 
 
 def _run(params, y0, times, U, ends, coeffs, rtol, atol, dense):
     """Integrate under ``u`` linear between ``(times, U)``; returns the final state, ``u`` there and the intervals.
 
     Each interval is one call from its start (local time 0); the intervals keep the given
-    ``times`` as their bounds, so that consecutive ones meet exactly.
+    ``times`` as their bounds, so that consecutive ones meet exactly. The Python form of
+    :func:`skatetrace.planning.shooting.segment_end`, kept for the dense output of the phases.
     """
     y = np.array(y0, dtype=float)
     out = []
@@ -122,7 +117,7 @@ def _run(params, y0, times, U, ends, coeffs, rtol, atol, dense):
 
 
 def _end_conditions(params, y, u_end, ends, coeffs, target, L, scale_r, scale_v):
-    kap = coeffs[-1]
+    kap = coeffs[-1].tolist()
     sig = y[4] - (ends[-2] if len(ends) > 1 else 0.0)
     k_end = kap[0] + sig * (kap[1] + sig * (kap[2] + sig * kap[3]))
     ad, bd, _ = constrained_rates(params, k_end, y[0], y[1], y[2], y[3], u_end)
@@ -148,11 +143,11 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
     L = float(ends[-1])
     tot = params.M + params.m
     p1, p2 = rest_momenta(params, start.a, start.b, start.adot, start.bdot)
-    kap0 = coeffs[0][0]
+    kap0 = float(coeffs[0, 0])
     from ..dynamics.model import curvature_coefficients
     c_a, c_b, _c0 = curvature_coefficients(params, kap0, p1, p2, start.a, start.b)
     u0 = (-c_b * start.adot + c_a * start.bdot) / math.hypot(c_a, c_b)
-    times = np.asarray(times, dtype=float)
+    times = np.ascontiguousarray(times, dtype=float)
     N = times.size - 1
     bounds = list(range(0, N, stride)) + [N]
     K = len(bounds) - 1
@@ -167,13 +162,17 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
     scale_r = max(math.hypot(target.a, target.b), params.length_scale)
     scale_v = max(math.hypot(target.adot, target.bdot), 1.0)
     count = 0
+    bounds_a = np.array(bounds, dtype=np.int64)
+    every = np.ones(K, dtype=np.bool_)
+    M, m, I, rtol, atol = float(params.M), float(params.m), float(params.I), float(rtol), float(atol)
 
     def unpack(z):
         uu = np.concatenate([[u0], z[1:N + 1]])
-        ys = [y0] + list(z[N + 1:].reshape(K - 1, 5) * yscale)
+        ys = np.concatenate([y0[None, :], z[N + 1:].reshape(K - 1, 5) * yscale])
         return z[0], uu, ys
 
-    def segment(k, z, dense=False):
+    def segment(k, z):
+        """The dense integration of segment ``k`` (Python: it builds the phases)."""
         nonlocal count
         count += 1
         sig, uu, ys = unpack(z)
@@ -182,8 +181,7 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
         y = ys[k].copy()
         s_start = y[4]
         y[4] = 0.0
-        ends_k = ends - s_start
-        yk, u_end, out = _run(params, y, tt, uu[i0:i1 + 1], ends_k, coeffs, rtol, atol, dense)
+        yk, u_end, out = _run(params, y, tt, uu[i0:i1 + 1], ends - s_start, coeffs, rtol, atol, True)
         if yk is None:
             return None, None, out
         yk = yk.copy()
@@ -191,35 +189,39 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
         out = [(t0, t1, man, s0 + s_start, j) for t0, t1, man, s0, j in out]
         return yk, u_end, out
 
-    def residual(z, only=None, cache=None):
-        sig, uu, ys = unpack(z)
-        r = []
-        ends_y = []
-        for k in range(K):
-            if cache is not None and only is not None and k not in only:
-                yk, u_end = cache[k]
-            else:
-                yk, u_end, _ = segment(k, z)
-                if yk is None:
-                    return None, None
-            ends_y.append((yk, u_end))
-            if k < K - 1:
-                r.append((yk - ys[k + 1]) / yscale)
-        fin, _end = _end_conditions(params, ends_y[-1][0], ends_y[-1][1], ends, coeffs, target, L, scale_r, scale_v)
-        r.append(fin)
-        return np.concatenate(r), ends_y
+    def end_conditions(y, u_end):
+        return _end_conditions(params, y, u_end, ends, coeffs, target, L, scale_r, scale_v)[0]
 
-    def affected(i):
-        if i == 0:
-            return None  # the time scale: every segment
-        if i <= N:
-            node = i
-            return {k for k in range(K) if bounds[k] <= node <= bounds[k + 1]}
-        seg = (i - N - 1) // 5 + 1
-        return {seg}
+    def residual(z):
+        """The residuals at ``z`` and the segments' ends (compiled), or ``(None, None)`` on a failure."""
+        nonlocal count
+        sig, uu, ys = unpack(z)
+        E = np.empty((K, 5))
+        ok, n = segment_ends(M, m, I, ys, sig, times, uu, bounds_a, ends, coeffs, rtol, atol, every, E)
+        count += n
+        if not ok:
+            return None, None
+        return np.concatenate([((E[:-1] - ys[1:]) / yscale).ravel(), end_conditions(E[-1], uu[-1])]), E
+
+    def jacobian(z, r, E):
+        """Forward differences, one column per unknown (compiled); None on a failure."""
+        nonlocal count
+        sig, uu, ys = unpack(z)
+        J = np.empty((r.size, z.size))
+        last, moved, steps = np.empty((z.size, 6)), np.zeros(z.size, dtype=np.bool_), np.empty(z.size)
+        ok, n = jacobian_columns(M, m, I, z, uu, ys, yscale, times, bounds_a, ends, coeffs, rtol, atol, E, r, J, last,
+                                 moved, steps)
+        count += n
+        if not ok:
+            return None
+        # the end conditions: unmoved unless the last segment moved
+        J[-6:] = (r[-6:] - r[-6:])[:, None] / steps
+        for i in np.flatnonzero(moved):
+            J[-6:, i] = (end_conditions(last[i, :5], last[i, 5]) - r[-6:]) / steps[i]
+        return J
 
     with np.errstate(all="ignore"):
-        r, cache = residual(z)
+        r, E = residual(z)
         ok = r is not None
         previous = math.inf
         for _ in range(max_iter if ok else 0):
@@ -230,31 +232,21 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
             if worst <= 0.1 * residual_tol or (worst <= residual_tol and worst > 0.5 * previous):
                 break
             previous = worst
-            J = np.empty((r.size, z.size))
-            for i in range(z.size):
-                h = 1e-7 * max(1.0, abs(z[i]))
-                zp = z.copy()
-                zp[i] += h
-                only = affected(i)
-                rp, _c = residual(zp, only=only, cache=cache)
-                if rp is None:
-                    ok = False
-                    break
-                J[:, i] = (rp - r) / h
-            if not ok:
+            J = jacobian(z, r, E)
+            if J is None:
                 break
             # least-norm step by a complete orthogonal factorisation (LAPACK gelsy): the same
             # step as numpy's SVD-based lstsq, in a third of the time on these shapes
             dz = scipy.linalg.lstsq(J, -r, lapack_driver="gelsy", check_finite=False)[0]
             step = 1.0
             while step > 1e-3:
-                rn, cn = residual(z + step * dz)
+                rn, En = residual(z + step * dz)
                 if rn is not None and np.linalg.norm(rn) < np.linalg.norm(r):
                     break
                 step *= 0.5
             if rn is None or step <= 1e-3:
                 break
-            z, r, cache = z + step * dz, rn, cn
+            z, r, E = z + step * dz, rn, En
     worst = float(np.max(np.abs(r))) if r is not None else math.inf
     names = ("length", "end_a", "end_b", "end_adot", "end_bdot", "end_speed")
     res = {k: float(v) for k, v in zip(names, r[-6:])} if r is not None else {}
@@ -265,7 +257,7 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
                                intervals=(), start=start, end=target, residuals=res, nfev=count)
     out = []
     for k in range(K):
-        yk, u_end, seg_out = segment(k, z, dense=True)
+        yk, u_end, seg_out = segment(k, z)
         out += seg_out
     _fin, end = _end_conditions(params, yk, u_end, ends, coeffs, target, L, scale_r, scale_v)
     return FinishedSection(success=True, message="finished exactly", intervals=tuple(out), start=start, end=end,
