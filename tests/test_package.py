@@ -34,7 +34,7 @@ def test_functions_named_like_their_modules_stay_functions():
 
 def test_import_does_not_load_the_drawing_readers_solve_ivp_or_plotting():
     code = ("import sys, skatetrace.cli; "
-            "print(' '.join(m for m in ('svgpathtools', 'scipy.interpolate', 'scipy.integrate', 'matplotlib') if m in sys.modules))")
+            "print(' '.join(m for m in ('svgelements', 'defusedxml', 'scipy.interpolate', 'scipy.integrate', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == ""
 

@@ -241,4 +241,9 @@ def _normalised_cumsum(steps: np.ndarray) -> np.ndarray:
     """Knots ``0 = u0 < u1 < ... < un = 1`` spaced like ``steps`` (normalised: any scale of input)."""
     u = np.concatenate([[0.0], np.cumsum(steps / steps.sum())])
     u[-1] = 1.0
+    if not np.all(np.diff(u) > 0.0):
+        # a step lost in the rounding of the run's total (1e3 beside 1e12): scipy would refuse the knots
+        raise DrawingError(f"two consecutive points are {float(np.min(steps)):.3g} apart on a run "
+                           f"{float(steps.sum()):.3g} long: too close to tell apart in double precision; remove the "
+                           "repeated point or rescale the coordinates")
     return u

@@ -1,34 +1,49 @@
 """SVG drawings (a file, SVG text, or path data) read as a :class:`~skatetrace.drawings.curves.Drawing` of exact pieces.
 
-The one module that knows SVG: it alone imports the SVG parser (svgpathtools).
+The one module that knows SVG: it alone imports the SVG parsers (defusedxml and svgelements).
+
+Reading
+-------
+The document is parsed first with defusedxml, which refuses DTDs that declare entities (an "XML
+bomb" expands a few of them into gigabytes) and external references (``<!ENTITY x SYSTEM
+"file:///etc/passwd">``). The same bytes then go to svgelements' ``SVG.parse``, which expands
+``<use>`` (``href`` or ``xlink:href``, of shapes, groups, symbols and other ``<use>``), applies
+``<style>`` sheets (selectors ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``) and ``style``
+attributes with inheritance, converts lengths in units (``mm``, ``cm``, ``in``, ``pt``, ``pc``,
+``%``) to user units at 96 per inch, and composes every transform, nested ``<svg>`` viewports
+included. Where svgelements departs from SVG, :mod:`.svg_style` and this module correct it: a
+``<symbol>`` (or a ``<marker>``, ``<mask>``) is drawn only through a ``<use>``, a ``<use>`` of a
+``<symbol>`` with a ``viewBox`` maps it onto the ``<use>``'s width and height, a ``<switch>`` draws
+one child, a nested ``<svg>`` without ``viewBox`` is moved to its ``x``, ``y``, and visibility is
+read at all. ``<use>`` cycles and expansions beyond ``MAX_ELEMENTS`` elements are refused.
 
 Coordinates
 -----------
-SVG user units (the ``viewBox`` coordinates, after every group and element ``transform``) become
-model units one to one, with the y axis flipped: SVG's y points down the page, ours points up, so
-a drawing keeps its handedness (a loop drawn clockwise on screen is clockwise here too). The
-page size (``width="210mm"``) is paper, not ice: it is recorded in the drawing's ``notes`` and
-otherwise ignored. Scale a drawing to the ice with :meth:`Drawing.scaled_to` and a size from
-:func:`~skatetrace.drawings.lengths.parse_length`.
+SVG user units (the root's ``viewBox`` coordinates, after every group, ``<use>``, nested ``<svg>``
+and element ``transform``) become model units one to one, with the y axis flipped: SVG's y points
+down the page, ours points up, so a drawing keeps its handedness (a loop drawn clockwise on screen
+is clockwise here too). The page size (``width="210mm"``) is paper, not ice: it is in ``notes``
+and otherwise ignored (the root's viewport transform is taken off again). Scale a drawing to the
+ice with :meth:`Drawing.scaled_to` and a size from :func:`~skatetrace.drawings.lengths.parse_length`.
 
 Exactness
 ---------
 SVG segments become pieces with exact derivatives: ``L``/``H``/``V``/``Z`` lines become
 :class:`LinePiece`, ``Q``/``T``/``C``/``S`` :class:`BezierPiece`, ``A`` :class:`EllipticArcPiece`.
-The affine transforms (and the y flip) are applied to the parameters themselves: an affine map
-of a Bézier is the Bézier of the mapped control points, and an affine map of an elliptic arc is
-an elliptic arc whose axes come from the singular value decomposition of the map. svgpathtools
-reads the XML, walks the groups, composes the transforms and parses the path data; its own arc
-transform is not used because it chooses the wrong arc for some reflections (e.g.
-``matrix(0 1 1 0)``) and fails on singular matrices.
+svgelements' geometry is taken untransformed, and the composed affine transform (and the y flip)
+is applied to the parameters themselves: an affine map of a Bézier is the Bézier of the mapped
+control points, and an affine map of an elliptic arc is an elliptic arc whose axes come from the
+singular value decomposition of the map (svgelements' own arc transform keeps the axes
+perpendicular, which a rotated ellipse under a non-uniform scale does not).
 
 Degenerate input
 ----------------
-Exactly zero-length segments are dropped (with a note); tiny ones are kept. A Bézier with a
-zero-length handle is kept (its derivative vanishes at that end; a note says so). An element
-made only of zero-length segments, non-finite or huge (beyond ``MAX_COORD``) coordinates, a singular
-transform, malformed XML or path data, and missing files raise :class:`DrawingError` with the
-file, element or line and what would be accepted.
+Exactly zero-length segments are dropped (with a note); tiny ones are kept. An arc with a zero
+radius is a straight line (as SVG says; a note says so). A Bézier with a zero-length handle is kept
+(its derivative vanishes at that end; a note says so). An element made only of zero-length segments
+or of zero size, non-finite or huge (beyond ``MAX_COORD``) coordinates, a singular transform,
+malformed XML, path data or transforms, refused XML and missing files raise :class:`DrawingError`
+with the file, element or line and what would be accepted.
 """
 
 from __future__ import annotations
@@ -40,31 +55,35 @@ import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from svgpathtools import Arc, CubicBezier, Document, Line, QuadraticBezier, parse_path
-from svgpathtools.document import CONVERSIONS
+import svgelements as se
+from defusedxml import DefusedXmlException, EntitiesForbidden, ExternalReferenceForbidden
+from defusedxml.ElementTree import fromstring as _safe_fromstring
 
 from .curves import BezierPiece, Drawing, EllipticArcPiece, LinePiece, Path, Piece
 from .files import file_stem, read_bytes, shorten
 from .lengths import CLOSE_TOL, MAX_COORD, extent
-from .svg_style import Visibility, visibility
+from .svg_style import (MAX_ELEMENTS, SHAPE_TAGS, Placed, Visibility, check_transforms, expand, local_tag,
+                        styled_names, visibility)
 from ..errors import DrawingError
 
-__all__ = ["read_svg", "parse_path_string", "SVG_SUFFIXES"]
+__all__ = ["read_svg", "parse_path_string", "SVG_SUFFIXES", "MAX_ELEMENTS"]
 
 SVG_SUFFIXES = (".svg",)
 """File suffixes of SVG drawings (:func:`skatetrace.drawings.load.load_drawing` reads them with :func:`read_svg`)."""
 
-_SVG_NS = "{http://www.w3.org/2000/svg}"
 _FLIP = np.array([[1.0, 0.0], [0.0, -1.0]])
 _SAMPLES = np.linspace(0.0, 1.0, 17)
+_PPI = 96.0  # CSS pixels per inch: lengths in units become user units at this rate, as in SVG
+_EXTENT = {"rect": "width and height > 0", "circle": "r > 0", "ellipse": "rx and ry > 0",
+           "polyline": "points", "polygon": "points", "line": "x1, y1, x2, y2", "path": "d"}
 
-# What svgpathtools (and the XML parser under it) raises on input it cannot read. Caught only around
-# calls into it, and always re-raised as a DrawingError that says which file and element failed.
+# What svgelements raises on input it cannot read. Caught only around calls into it, and always
+# re-raised as a DrawingError that says which file and element failed.
 _LIBRARY_ERRORS = (ValueError, TypeError, ArithmeticError, AssertionError, IndexError, KeyError, AttributeError)
 
 
 def read_svg(source: str | os.PathLike) -> Drawing:
-    """Read the paths of an SVG document as a drawing, one :class:`Path` per continuous subpath.
+    """Read the shapes of an SVG document as a drawing, one :class:`Path` per continuous subpath.
 
     Parameters
     ----------
@@ -76,29 +95,37 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     Drawing
         In SVG user units (``unit="model"``) with the y axis pointing up. Paths are in document
         order, named by the element's ``id`` (``"id#2"`` for its second subpath) or by its tag and
-        position (``"path-3"``). A subpath is ``closed`` when its end meets its start within
-        ``CLOSE_TOL`` times the drawing's size. ``notes`` records the page size, dropped
-        zero-length segments, zero-length Bézier handles and svgpathtools' warnings.
+        position (``"path-3"``); what a ``<use>`` draws is named after the ``<use>`` (its ``id``,
+        or ``"use-4"``), its subpaths counted over all the shapes it draws. A subpath is
+        ``closed`` when its end meets its start within ``CLOSE_TOL`` times the drawing's size.
+        ``notes`` records the page size, what was skipped and why, dropped zero-length segments,
+        zero-radius arcs, zero-length Bézier handles and svgelements' warnings.
 
     Raises
     ------
     DrawingError
-        Missing or unreadable file, malformed XML, invalid ``transform`` or path data, a singular
-        transform, an element made only of zero-length segments, non-finite or huge coordinates,
-        or a document without any drawable element.
+        Missing or unreadable file, malformed XML, a DTD that declares entities or refers to
+        external files, a ``<use>`` cycle or more than ``MAX_ELEMENTS`` elements after expanding
+        ``<use>``, invalid ``transform`` or path data, a singular transform, an element made only of
+        zero-length segments or of zero size, non-finite or huge coordinates, or a document without
+        any drawable element.
 
     Notes
     -----
-    Elements read (through svgpathtools' ``Document.paths``): ``path``, ``rect`` (also rounded),
-    ``circle``, ``ellipse``, ``line``, ``polyline`` and ``polygon``, inside the root and nested
-    ``<g>`` groups, with every ``transform`` on the way. Not read: ``<use>`` clones, ``<symbol>``,
-    nested ``<svg>``, ``<a>`` and ``<switch>`` containers, text, clip paths, ``<defs>`` (never
-    drawn by itself), CSS transforms and ``<style>`` sheets. Elements hidden by ``display:none`` or
-    ``visibility:hidden`` (on them or inherited) are skipped, and so are elements that paint
-    nothing (fill and stroke ``none``: the invisible frames of icon sets) where anything else is
-    painted (:mod:`~skatetrace.drawings.svg_style`); ``notes`` lists what was skipped. An SVG without the SVG namespace declaration is read as if it had one. An invalid
-    ``transform`` attribute is an error with svgpathtools 1.8 or later; older versions skip it
-    with a warning, which goes into ``notes``.
+    Shapes read: ``path``, ``rect`` (also rounded), ``circle``, ``ellipse``, ``line``, ``polyline``
+    and ``polygon``, inside the root, ``<g>``, ``<a>``, ``<switch>`` (its first child without
+    conditions), nested ``<svg>`` viewports and ``<use>`` clones (of shapes, groups, ``<symbol>``,
+    other ``<use>``), with every ``transform``, ``x``/``y`` and viewport on the way. Lengths in
+    units are user units at 96 per inch. ``<defs>``, ``<symbol>``, ``<marker>``, ``<mask>``,
+    ``<clipPath>`` and ``<pattern>`` are never drawn by themselves. CSS from ``<style>`` sheets
+    (simple selectors: ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``; not descendant or
+    attribute selectors, nor rules after the element they would style) and ``style`` attributes
+    are applied. Elements hidden by ``display:none`` or ``visibility:hidden`` (on them or
+    inherited) are skipped, and so are elements that paint nothing (fill and stroke ``none``: the
+    invisible frames of icon sets) where anything else is painted; ``notes`` lists what was
+    skipped. A CSS ``transform`` applies like the attribute (without ``transform-origin``). Not
+    read: text, images, clip paths and masks (the full shape is read), markers, external ``href``
+    (``other.svg#id``). An SVG without the SVG namespace declaration is read as if it had one.
 
     Examples
     --------
@@ -112,64 +139,78 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     [('loop', True, 2, 'EllipticArcPiece')]
     >>> [round(v, 9) for v in drawing.bbox()]   # y flipped: the page's centre (50, 50) is (50, -50)
     [30.0, -70.0, 70.0, -30.0]
+    >>> clones = read_svg('''<svg xmlns="http://www.w3.org/2000/svg">
+    ...   <defs><symbol id="dash"><path d="M 0 0 L 10 0"/></symbol></defs>
+    ...   <use id="a" href="#dash" x="5"/><use id="b" href="#dash" y="20"/>
+    ... </svg>''')
+    >>> [(p.name, p.pieces[0].start.tolist(), p.pieces[0].end.tolist()) for p in clones.paths]
+    [('a', [5.0, 0.0], [15.0, 0.0]), ('b', [0.0, -20.0], [10.0, -20.0])]
     """
     if isinstance(source, os.PathLike) or (isinstance(source, str) and "<" not in source):
         file_name = os.fspath(source)
-        stream: io.IOBase = io.BytesIO(read_bytes(file_name, "SVG"))
+        data: bytes | str = read_bytes(file_name, "SVG")
         origin, name = file_name, file_stem(file_name)
     elif isinstance(source, str):
-        stream, origin, name = io.StringIO(source), "the SVG text", "svg"
+        data, origin, name = source, "the SVG text", "svg"
     else:
         raise DrawingError(f"read_svg expects a file name or SVG text, got {type(source).__name__}")
 
-    document = _parse_document(stream, origin)
-    root = document.tree.getroot()
-    _adopt_svg_namespace(root)
+    root = _parse_xml(data, origin)
     notes = list(_page_notes(root))
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            # Empty path data for every element: we only want svgpathtools' walk of the groups and the
-            # composed transform of each element, and parse and transform the geometry ourselves.
-            found = document.paths(path_conversions={tag: _no_path_data for tag in CONVERSIONS})
-        except _LIBRARY_ERRORS as exc:
-            raise DrawingError(f"{origin}: a transform attribute cannot be read ({exc}); expected e.g. "
-                               "'translate(10,20) rotate(30) scale(2) matrix(a,b,c,d,e,f)'") from exc
-    notes.extend(f"{origin}: {message}" for message in dict.fromkeys(str(w.message) for w in caught))
-    order = {id(element): k for k, element in enumerate(root.iter())}
-    found.sort(key=lambda p: order.get(id(p.element), 0))
+    check_transforms(root, origin)
+    placed = expand(root, origin)
+    document = _parse_svg(data, root, origin, notes)
+    if not isinstance(document, se.Group):  # the root is not <svg> or <g>: svgelements draws nothing
+        document, placed = se.SVG(), []
+    shapes = list(_shapes(document))
+    styled = styled_names(root)
 
-    parents = {child: parent for parent in root.iter() for child in parent}
-    entries, unpainted, hidden = [], [], []
-    for k, svg_path in enumerate(found, start=1):
-        element = svg_path.element
-        tag = _local_tag(element.tag)
-        label = f"<{tag} id={element.get('id')!r}>" if element.get("id") else f"<{tag}> number {k}"
+    units: dict[int, int] = {}  # id of the element named (a shape, or the outermost <use>) -> its number
+    for p in placed:
+        if p.skipped is None:
+            units.setdefault(id(_unit_of(p)), len(units) + 1)
+    entries, unpainted, hidden, skipped = [], [], [], []
+    for p, shape, containers in _match(placed, shapes, styled):
+        if p is not None and p.skipped is not None:
+            skipped.append(f"{_describe(p.element)} ({p.skipped})")
+            continue
+        base, label = _names(p, shape, units)
         where = f"{origin}: {label}"
-        shown = visibility(element, parents)
+        if shape is None:  # svgelements dropped it: it has no extent
+            tag = p.tag
+            if p.declared_hidden:
+                hidden.append(label)
+                continue
+            if tag in ("path", "polyline", "polygon"):
+                notes.append(f"{where} is empty and was skipped")
+                continue
+            _no_extent(where, tag, p.element.attrib)
+        chain = [document.values, *(c.values for c in containers), shape.values]
+        shown = visibility(chain)
         if shown == Visibility.HIDDEN:
             hidden.append(label)
             continue
-        try:
-            d = CONVERSIONS[tag](element)
-        except _LIBRARY_ERRORS as exc:
-            raise DrawingError(f"{where} cannot be turned into path data ({exc!r}); check its "
-                               "geometry attributes (e.g. a circle needs cx, cy and r)") from exc
-        segments = _parse_d(d, where, notes)
-        if not segments:
+        segments = _segments(shape, p, where, notes)
+        if not any(not isinstance(s, se.Move) for s in segments):
             notes.append(f"{where} is empty and was skipped")
             continue
-        matrix = np.asarray(svg_path.transform if svg_path.transform is not None else np.eye(3), float)
+        matrix = _composed(shape, p, document, containers, where)
+        if matrix is None:
+            skipped.append(f"{label} (its <use> of a <symbol> has zero width or height)")
+            continue
         _check_transform(matrix, where)
         A, b = _FLIP @ matrix[:2, :2], _FLIP @ matrix[:2, 2]
-        (entries if shown == Visibility.DRAWN else unpainted).append(
-            (element.get("id") or f"{tag}-{k}", where, segments, A, b))
+        unit = id(_unit_of(p)) if p is not None else id(shape)
+        (entries if shown == Visibility.DRAWN else unpainted).append((unit, base, where, segments, A, b))
+    if skipped:
+        notes.append(f"{origin}: skipped {len(skipped)} element(s) that SVG does not draw by themselves: "
+                     f"{', '.join(skipped[:5])}{' ...' if len(skipped) > 5 else ''}")
     if hidden:
         notes.append(f"{origin}: skipped {len(hidden)} hidden element(s) (display:none or visibility:hidden): "
                      f"{', '.join(hidden[:5])}{' ...' if len(hidden) > 5 else ''}")
     if unpainted and entries:
         notes.append(f"{origin}: skipped {len(unpainted)} element(s) that paint nothing (fill and stroke none): "
-                     f"{', '.join(u[1].split(': ', 1)[-1] for u in unpainted[:5])}{' ...' if len(unpainted) > 5 else ''}")
+                     f"{', '.join(u[2].split(': ', 1)[-1] for u in unpainted[:5])}{' ...' if len(unpainted) > 5 else ''}")
     elif unpainted:
         notes.append(f"{origin}: nothing in the drawing is painted (fill and stroke none); its geometry is read anyway")
         entries = unpainted
@@ -177,7 +218,11 @@ def read_svg(source: str | os.PathLike) -> Drawing:
         raise DrawingError(f"every drawable element of {origin} is hidden (display:none or visibility:hidden): "
                            f"{', '.join(hidden[:5])}")
     if not entries:
-        hint = "" if _local_tag(root.tag) == "svg" else f" (the root element is <{_local_tag(root.tag)}>, not <svg>)"
+        hint = ""
+        if local_tag(root.tag) != "svg":
+            hint = f" (the root element is <{local_tag(root.tag)}>, not <svg>)"
+        elif skipped:
+            hint = f" (skipped {len(skipped)} element(s) that SVG does not draw by themselves, e.g. {skipped[0]})"
         raise DrawingError(f"no paths found in {origin}{hint}: expected <path>, <rect>, <circle>, <ellipse>, "
                            "<line>, <polyline> or <polygon> elements with some extent")
     return _assemble(entries, name=name, source=origin, notes=notes)
@@ -217,32 +262,120 @@ def parse_path_string(d: str) -> Drawing:
     notes: list[str] = []
     where = f"path data {shorten(d)!r}"
     segments = _parse_d(d, where, notes)
-    if not segments:
+    if not any(not isinstance(s, se.Move) for s in segments):
         raise DrawingError(f"{where} draws nothing (a lone 'M' makes no segment): expected e.g. 'M 0 0 L 10 0'")
-    return _assemble([("path", where, segments, _FLIP, np.zeros(2))], name="path", source="path data", notes=notes)
+    return _assemble([(0, "path", where, segments, _FLIP, np.zeros(2))], name="path", source="path data",
+                     notes=notes)
 
 
-def _parse_document(stream: io.IOBase, origin: str) -> Document:
+# --- the document -------------------------------------------------------------------------------------
+
+def _parse_xml(data: bytes | str, origin: str) -> ET.Element:
+    """The XML tree, parsed safely: entity declarations and external references are refused."""
     try:
-        try:
-            return Document(stream, strict_transform_parsing=True)
-        except TypeError:  # svgpathtools < 1.8 has no strict mode: invalid transforms are skipped
-            stream.seek(0)
-            return Document(stream)
+        return _safe_fromstring(data, forbid_dtd=False, forbid_entities=True, forbid_external=True)
+    except EntitiesForbidden as exc:
+        where = f" refers to {exc.sysid!r}" if exc.sysid else " (nested entities can expand into gigabytes)"
+        raise DrawingError(f"{origin} declares the XML entity {exc.name!r} in its DTD and is refused: entities are "
+                           f"not read, since an entity{where} can read local files or expand without bound (an XML "
+                           "bomb); remove the <!DOCTYPE ...> declarations and save the SVG again") from None
+    except ExternalReferenceForbidden as exc:
+        raise DrawingError(f"{origin} refers to the external resource {exc.sysid or exc.pubid!r} and is refused: "
+                           "an SVG drawing is read self-contained; remove the reference") from None
+    except DefusedXmlException as exc:
+        raise DrawingError(f"{origin} is refused as unsafe XML ({exc}); remove its <!DOCTYPE ...> declarations") from None
     except ET.ParseError as exc:
         raise DrawingError(f"{origin} is not well-formed XML ({exc}); expected an SVG document") from exc
 
 
-def _adopt_svg_namespace(root: ET.Element) -> None:
-    """Put un-namespaced elements in the SVG namespace (svgpathtools only finds ``svg:`` tags)."""
-    if isinstance(root.tag, str) and not root.tag.startswith("{"):
-        for element in root.iter():
-            if isinstance(element.tag, str) and not element.tag.startswith("{"):
-                element.tag = _SVG_NS + element.tag
+def _parse_svg(data: bytes | str, root: ET.Element, origin: str, notes: list[str]):
+    """svgelements' document tree of the same bytes, its warnings appended to ``notes``."""
+    stream = io.BytesIO(data) if isinstance(data, bytes) else io.StringIO(data)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            document = se.SVG.parse(stream, reify=False, ppi=_PPI, parse_display_none=True)
+        except RecursionError:
+            raise DrawingError(f"{origin} nests its elements too deeply to be read") from None
+        except _LIBRARY_ERRORS as exc:
+            for element in root.iter():  # the likely culprit: path data that svgelements fails on
+                if local_tag(element.tag) == "path" and element.get("d"):
+                    _parse_d(element.get("d"), f"{origin}: {_describe(element)}", [])
+            raise DrawingError(f"{origin} cannot be read by svgelements ({exc!r}); check its lengths (e.g. "
+                               "width='10mm'), colours and path data") from exc
+    box = document.viewbox if isinstance(document, se.SVG) else None
+    if box is not None and not (document.width and document.height and box.width and box.height):
+        # svgelements stops reading at an <svg> with an empty viewport and returns that element
+        sizes = {key: document.values.get(key) for key in ("width", "height", "viewBox")}
+        raise DrawingError(f"{origin}: an <svg> element has a viewBox and zero width or height ({sizes}; an "
+                           "unreadable width counts as zero): SVG draws nothing inside it; give it a size or "
+                           "remove its width and height")
+    notes.extend(f"{origin}: {message}" for message in dict.fromkeys(str(w.message) for w in caught))
+    return document
 
 
-def _local_tag(tag) -> str:
-    return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else str(tag)
+def _shapes(group, containers=()):
+    """svgelements' shapes in document order, each with the groups, ``<use>`` and ``<svg>`` around it."""
+    for item in group:
+        if isinstance(item, se.Shape):
+            yield item, containers
+        elif isinstance(item, (se.Group, se.Use)):
+            yield from _shapes(item, (*containers, item))
+
+
+def _match(placed: list[Placed], shapes: list, styled: set[str]):
+    """Pair svgelements' shapes with their elements in :func:`expand`'s list; ``(placed, None, ())`` for
+    an element svgelements dropped (it has no extent), ``(None, shape, containers)`` for a shape that
+    matches no element (not expected; read as drawn)."""
+    j = 0
+    for shape, containers in shapes:
+        attributes = shape.values.get("attributes", {})
+        tag = shape.values.get("tag")
+        k = next((i for i in range(j, len(placed)) if placed[i].tag == tag and all(
+            _same_attribute(key, attributes.get(key), value) for key, value in placed[i].element.attrib.items()
+            if key not in styled)), None)
+        if k is None:
+            yield None, shape, containers
+            continue
+        for dropped in placed[j:k]:
+            yield dropped, None, ()
+        yield placed[k], shape, containers
+        j = k + 1
+    for dropped in placed[j:]:
+        yield dropped, None, ()
+
+
+def _same_attribute(key: str, parsed, given: str) -> bool:
+    """svgelements' copy of an attribute is the element's own (a transform after those of its groups)."""
+    return parsed.strip().endswith(given.strip()) if key == "transform" and isinstance(parsed, str) else parsed == given
+
+
+def _unit_of(p: Placed) -> ET.Element:
+    """The element a shape is named after: the outermost ``<use>`` that draws it, or itself."""
+    uses = p.uses
+    return uses[0] if uses else p.element
+
+
+def _describe(element: ET.Element, number: int | None = None) -> str:
+    tag, ident = local_tag(element.tag), element.get("id")
+    if ident:
+        return f"<{tag} id={ident!r}>"
+    return f"<{tag}> number {number}" if number is not None else f"<{tag}>"
+
+
+def _names(p: Placed | None, shape, units: dict[int, int]) -> tuple[str, str]:
+    """The base name of the shape's paths and its label in messages."""
+    if p is None:
+        ident = shape.values.get("id")
+        tag = shape.values.get("tag", "shape")
+        return ident or tag, f"<{tag} id={ident!r}>" if ident else f"<{tag}>"
+    unit = _unit_of(p)
+    k = units.get(id(unit), 0)
+    base = unit.get("id") or f"{local_tag(unit.tag)}-{k}"
+    label = _describe(unit, k)
+    if unit is not p.element:
+        label = f"{_describe(p.element)} in {label}"
+    return base, label
 
 
 def _page_notes(root: ET.Element):
@@ -252,32 +385,101 @@ def _page_notes(root: ET.Element):
         yield f"coordinates are SVG user units (page {described}), y flipped to point up"
 
 
-def _no_path_data(element) -> str:
-    return ""
+# --- transforms --------------------------------------------------------------------------------------
+
+def _matrix(m) -> np.ndarray:
+    """svgelements' ``Matrix`` (``x' = a x + c y + e``, ``y' = b x + d y + f``) as a 3x3 array."""
+    m = se.Matrix(m)
+    return np.array([[m.a, m.c, m.e], [m.b, m.d, m.f], [0.0, 0.0, 1.0]], dtype=float)
 
 
-def _parse_d(d: str, where: str, notes: list[str]) -> list:
-    """svgpathtools segments of path data, its warnings appended to ``notes``."""
-    if not d or not d.strip():
-        return []
-    if d.lstrip(" \t\r\n\f,")[:1] not in ("M", "m"):
-        # SVG path data begins with a moveto; without one svgpathtools leaves segments without a start.
-        raise DrawingError(f"{where}: the path data {shorten(d)!r} cannot be read (it does not begin with a "
-                           "moveto, 'M' or 'm'); expected SVG path commands such as 'M 0,0 c 10,0 10,10 20,10 z'")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            path = parse_path(d)
-        except AssertionError as exc:
-            # svgpathtools' Arc asserts distinct end points (zero radii are already turned into lines).
-            raise DrawingError(f"{where}: an elliptical arc ('A'/'a') ends where it starts; SVG draws nothing "
-                               "for it but svgpathtools cannot represent it: delete that arc command") from exc
-        except _LIBRARY_ERRORS as exc:
-            raise DrawingError(f"{where}: the path data {shorten(d)!r} cannot be read ({exc}); expected SVG "
-                               "path commands such as 'M 0,0 c 10,0 10,10 20,10 z'") from exc
-    for message in dict.fromkeys(str(w.message) for w in caught):
-        notes.append(f"{where}: {message}")
-    return list(path)
+def _length(text, relative: float) -> float | None:
+    """A length attribute in user units (``%`` of ``relative``), or None if missing or unreadable."""
+    if text is None or not str(text).strip():
+        return None
+    try:
+        value = se.Length(text).value(ppi=_PPI, relative_length=relative)
+    except _LIBRARY_ERRORS:
+        return None
+    return float(value) if isinstance(value, (int, float)) and math.isfinite(value) else None
+
+
+def _viewport(svg) -> tuple[float, float]:
+    """Width and height of the user space an svgelements ``<svg>`` sets up (for ``%`` lengths)."""
+    if svg.viewbox is not None and svg.viewbox.width is not None:
+        return float(svg.viewbox.width), float(svg.viewbox.height)
+    sizes = [v if isinstance(v, (int, float)) else 1000.0 for v in (svg.width, svg.height)]
+    return float(sizes[0]), float(sizes[1])
+
+
+def _composed(shape, p: Placed | None, document, containers, where: str) -> np.ndarray | None:
+    """The shape's transform into the root's user units, as svgelements composes it, corrected.
+
+    Each correction ``T`` belongs right after a container whose composed transform is ``P``:
+    ``P T P^-1 M`` puts it there; the innermost goes first. Corrections: a ``<use>`` of a
+    ``<symbol>`` with a ``viewBox`` (its viewport), a nested ``<svg>`` without ``viewBox`` (its
+    ``x``, ``y``) and the root's viewport, taken off again (the page size is not the drawing's).
+    None if a ``<use>`` of a ``<symbol>`` draws nothing (zero width or height).
+    """
+    try:
+        matrix = _matrix(shape.transform)
+        corrections = []  # (P, T), the outermost first
+        box = document.viewbox_transform if document.viewbox is not None else ""
+        own, full = document.values.get("transform"), shape.values.get("transform")
+        prefix = f"{own} {box}" if own else box
+        if box and isinstance(full, str) and full.startswith(prefix):
+            # svgelements' transform list begins with the root's viewport: read it without, no rounding
+            rest = se.Matrix(f"{own or ''} {full[len(prefix):]}")
+            rest.render(ppi=_PPI, width=_viewport(document)[0], height=_viewport(document)[1])
+            if all(isinstance(v, (int, float)) for v in (rest.a, rest.b, rest.c, rest.d, rest.e, rest.f)):
+                matrix, box = _matrix(rest), ""
+        if box:
+            V = _matrix(box)
+            if abs(np.linalg.det(V[:2, :2])) > 0:
+                corrections.append((_matrix(document.transform), np.linalg.inv(V)))
+        if p is not None:
+            xml = [e for e in p.chain[1:] if local_tag(e.tag) in ("g", "svg", "use")]
+            if len(xml) == len(containers):
+                viewport = _viewport(document)
+                for element, container in zip(xml, containers):
+                    tag = local_tag(element.tag)
+                    if tag == "svg" and isinstance(container, se.SVG):
+                        if container.viewbox is None and (container.x or container.y):
+                            T = _matrix(f"translate({container.x}, {container.y})")
+                            corrections.append((_matrix(container.transform), T))
+                        viewport = _viewport(container)
+                    elif tag == "use":
+                        target = p.chain[p.chain.index(element) + 1] if element is not p.chain[-1] else p.element
+                        if local_tag(target.tag) == "symbol" and target.get("viewBox"):
+                            T = _symbol_viewport(element, target, viewport)
+                            if T is None:
+                                return None
+                            corrections.append((_matrix(container.transform), T))
+        for P, T in reversed(corrections):
+            if abs(np.linalg.det(P[:2, :2])) > 0:
+                matrix = P @ T @ np.linalg.solve(P, matrix)
+    except _LIBRARY_ERRORS as exc:
+        raise DrawingError(f"{where}: its transform cannot be composed ({exc!r}); check the transform, x, y, "
+                           "width, height and viewBox attributes on the way to it") from exc
+    return matrix
+
+
+def _symbol_viewport(use: ET.Element, symbol: ET.Element, viewport: tuple[float, float]) -> np.ndarray | None:
+    """The transform that maps a ``<symbol>``'s ``viewBox`` onto the viewport its ``<use>`` sets up."""
+    box = se.Viewbox(symbol.get("viewBox"), symbol.get("preserveAspectRatio"))
+    if not box.width or not box.height or box.width <= 0 or box.height <= 0:
+        return np.eye(3)  # an unusable viewBox is ignored
+    width = _length(use.get("width"), viewport[0])
+    width = _length(symbol.get("width"), viewport[0]) if width is None else width
+    height = _length(use.get("height"), viewport[1])
+    height = _length(symbol.get("height"), viewport[1]) if height is None else height
+    width = viewport[0] if width is None else width  # SVG's default: 100%
+    height = viewport[1] if height is None else height
+    if not (width > 0 and height > 0):
+        return None
+    text = se.Viewbox.viewbox_transform(0.0, 0.0, width, height, box.x, box.y, box.width, box.height,
+                                        box.preserve_aspect_ratio)
+    return _matrix(text)
 
 
 def _check_transform(matrix: np.ndarray, where: str) -> None:
@@ -292,29 +494,176 @@ def _check_transform(matrix: np.ndarray, where: str) -> None:
                            "fix the transform attribute of the element or of its groups")
 
 
-def _is_zero_length(segment) -> bool:
-    if isinstance(segment, Arc):
-        return segment.start == segment.end
-    return all(p == segment.start for p in segment.bpoints())
+# --- segments ----------------------------------------------------------------------------------------
+
+def _segments(shape, p: Placed | None, where: str, notes: list[str]) -> list:
+    """svgelements' untransformed segments of a shape; a path's data is read strictly.
+
+    svgelements gives a circle without ``r``, and a rect without ``width`` or ``height``, a size of
+    1 (SVG: 0, not drawn), an ellipse without ``ry`` a ``ry`` of 1 (SVG 2: ``auto``, equal to
+    ``rx``), and builds circles and ellipses from ``cos`` and ``sin`` (ends off by 1e-16); here
+    they follow SVG, with arcs from exact end points.
+    """
+    if isinstance(shape, se.Path):
+        d = p.element.get("d") if p is not None else shape.values.get("d")
+        return _parse_d(d or "", where, notes)
+    own = shape.values.get("attributes", {})
+    tag = shape.values.get("tag", "shape")
+    try:
+        if isinstance(shape, (se.Circle, se.Ellipse)):
+            rx, ry = float(shape.rx), float(shape.ry)
+            rx, ry = (rx if "rx" in own or tag == "circle" else ry), (ry if "ry" in own or tag == "circle" else rx)
+            if ("r" not in own if tag == "circle" else not ("rx" in own or "ry" in own)) or not (rx > 0 and ry > 0):
+                _no_extent(where, tag, own)
+            cx, cy = float(shape.cx), float(shape.cy)
+            corners = [(cx + rx, cy), (cx, cy + ry), (cx - rx, cy), (cx, cy - ry), (cx + rx, cy)]
+            segments = [se.Move(None, corners[0])]
+            for start, end in zip(corners, corners[1:]):
+                segments.append(se.Arc(start, rx, ry, 0.0, False, True, end))
+                segments[-1].svg_parameters = (rx, ry, 0.0, False, True)
+            return segments
+        if isinstance(shape, se.Rect) and not ("width" in own and "height" in own):
+            _no_extent(where, tag, own)
+        return list(shape.segments(transformed=False))
+    except _LIBRARY_ERRORS as exc:
+        raise DrawingError(f"{where} cannot be turned into path data ({exc!r}); check its geometry attributes "
+                           "(e.g. a circle needs cx, cy and r)") from exc
 
 
-def _xy(A: np.ndarray, b: np.ndarray, z: complex) -> tuple[float, float]:
-    p = A @ np.array([z.real, z.imag]) + b
+def _no_extent(where: str, tag: str, attributes) -> None:
+    shown = {k: v for k, v in attributes.items() if k in ("x", "y", "width", "height", "cx", "cy", "r", "rx", "ry")}
+    raise DrawingError(f"{where} has no extent: its size is zero, missing or unreadable ({shown or 'none given'}); "
+                       f"SVG draws nothing for it: give it {_EXTENT.get(tag, 'a size')} or remove it")
+
+
+def _parse_d(d: str, where: str, notes: list[str]) -> list:
+    """svgelements' segments of path data (``Move`` included), its warnings appended to ``notes``."""
+    if not d or not d.strip():
+        return []
+    if d.lstrip(" \t\r\n\f,")[:1] not in ("M", "m"):
+        raise DrawingError(f"{where}: the path data {shorten(d)!r} cannot be read (it does not begin with a "
+                           "moveto, 'M' or 'm'); expected SVG path commands such as 'M 0,0 c 10,0 10,10 20,10 z'")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            segments = list(_PathData(d))
+            complete = all(isinstance(v, (int, float)) for s in segments for q in _points(s) for v in (q.x, q.y))
+        except _LIBRARY_ERRORS:
+            complete = False
+    if not complete:
+        raise DrawingError(f"{where}: the path data {shorten(d)!r} cannot be read (a command lacks numbers or "
+                           "has a number it cannot read); expected SVG path commands such as "
+                           "'M 0,0 c 10,0 10,10 20,10 z'")
+    for message in dict.fromkeys(str(w.message) for w in caught):
+        notes.append(f"{where}: {message}")
+    return segments
+
+
+def _points(segment) -> list:
+    """The defining points of a segment (an arc's start, end, centre and axis points)."""
+    if isinstance(segment, se.Move):
+        return [segment.end]
+    if isinstance(segment, se.CubicBezier):
+        return [segment.start, segment.control1, segment.control2, segment.end]
+    if isinstance(segment, se.QuadraticBezier):
+        return [segment.start, segment.control, segment.end]
+    if isinstance(segment, se.Arc) and not hasattr(segment, "svg_parameters"):
+        return [segment.start, segment.end, segment.center, segment.prx, segment.pry]
+    return [segment.start, segment.end]
+
+
+def _xy(A: np.ndarray, b: np.ndarray, point) -> tuple[float, float]:
+    p = A @ np.array([float(point[0]), float(point[1])]) + b
     return float(p[0]) + 0.0, float(p[1]) + 0.0  # + 0.0: no -0.0 from the y flip
 
 
-def _arc_piece(arc: Arc, A: np.ndarray, b: np.ndarray, where: str) -> EllipticArcPiece:
-    """The exact image under ``x -> A x + b`` of svgpathtools' arc.
+def _same(p, q) -> bool:
+    """Exactly the same point (svgelements' own ``==`` allows 1e-12)."""
+    return float(p[0]) == float(q[0]) and float(p[1]) == float(q[1])
 
-    svgpathtools: ``point(t) = c + R(phi) (rx cos th, ry sin th)``, ``th = radians(theta + t delta)``.
-    The image is ``A c + b + M (cos th, sin th)`` with ``M = A R(phi) diag(rx, ry)``. Write
-    ``M = U S V^T`` with ``U`` and ``V`` rotations (the reflection, if any, goes into the sign
-    ``s`` of the second singular value); then ``V^T (cos th, sin th) = (cos(th - a), sin(th - a))``
-    and a negative second radius is the same ellipse run with the angle negated.
+
+class _PathData(se.Path):
+    """svgelements' path that keeps each arc's SVG parameters ``(rx, ry, rotation, large, sweep)``.
+
+    svgelements turns them into a centre at once, through ``sqrt`` of a difference that vanishes
+    for a half ellipse (radii too small, scaled up to fit): its centre is then off by about 1e-8
+    of the radius. :func:`_arc_geometry` works from the parameters instead.
     """
-    phi = math.radians(arc.rotation)
+
+    def arc(self, *arc_args, relative=False, **kwargs):
+        first = len(self)
+        se.Path.arc(self, *arc_args, relative=relative, **kwargs)
+        for k, segment in enumerate(list(self)[first:]):
+            segment.svg_parameters = tuple(arc_args[6 * k: 6 * k + 5])
+        return self
+
+
+def _arc_geometry(arc) -> tuple[np.ndarray, float, float, float, float, float] | None:
+    """``(c, rx, ry, phi, t0, dt)`` of an arc: ``point(s) = c + R(phi) (rx cos t, ry sin t)``,
+    ``t = t0 + s dt``; None for a zero radius (SVG draws a straight line).
+
+    From path data: the endpoint-to-centre conversion of SVG's implementation notes, with the
+    radii scaled up to fit exactly when they are too small (then the centre is the midpoint of the
+    chord, exactly). From svgelements' shapes (rounded rects, circles, ellipses): its centre and
+    axis points, both ends' parameters from ``atan2`` in the ellipse's frame and the sweep within a
+    turn of svgelements' (which fixes direction and size).
+    """
+    start = np.array([float(arc.start[0]), float(arc.start[1])])
+    end = np.array([float(arc.end[0]), float(arc.end[1])])
+    if hasattr(arc, "svg_parameters"):
+        rx, ry, rotation, large, sweep = arc.svg_parameters
+        rx, ry = abs(float(rx)), abs(float(ry))
+        if rx == 0 or ry == 0:
+            return None
+        phi = math.radians(float(rotation) % 360.0)
+        cos, sin = math.cos(phi), math.sin(phi)
+        dx, dy = (start - end) / 2
+        xp, yp = cos * dx + sin * dy, -sin * dx + cos * dy
+        lam = (xp / rx) ** 2 + (yp / ry) ** 2
+        if lam >= 1:
+            rx, ry, co = rx * math.sqrt(lam), ry * math.sqrt(lam), 0.0
+        else:
+            co = math.sqrt(1.0 - lam) / math.sqrt(lam) if lam > 0 else math.inf
+            co = -co if bool(large) == bool(sweep) else co
+        cxp, cyp = co * rx * yp / ry, -co * ry * xp / rx
+        c = np.array([cos * cxp - sin * cyp, sin * cxp + cos * cyp]) + (start + end) / 2
+        t0 = math.atan2((yp - cyp) / ry, (xp - cxp) / rx)
+        dt = math.atan2((-yp - cyp) / ry, (-xp - cxp) / rx) - t0
+        if sweep and dt < 0:
+            dt += 2 * math.pi
+        elif not sweep and dt > 0:
+            dt -= 2 * math.pi
+        return c, rx, ry, phi, t0, dt
+    c = np.array([float(arc.center[0]), float(arc.center[1])])
+    u = np.array([float(arc.prx[0]), float(arc.prx[1])]) - c
+    v = np.array([float(arc.pry[0]), float(arc.pry[1])]) - c
+    rx, ry, phi = float(np.hypot(*u)), float(np.hypot(*v)), math.atan2(u[1], u[0])
+    if rx == 0 or ry == 0:
+        return None
+    e, n = np.array([math.cos(phi), math.sin(phi)]), np.array([-math.sin(phi), math.cos(phi)])
+    t0, t1 = (math.atan2(float((p - c) @ n) / ry, float((p - c) @ e) / rx) for p in (start, end))
+    dt = t1 - t0
+    dt += 2 * math.pi * round((float(arc.sweep) - dt) / (2 * math.pi))
+    return c, rx, ry, phi, t0, dt
+
+
+def _arc_piece(arc, geometry, A: np.ndarray, b: np.ndarray, where: str) -> EllipticArcPiece:
+    """The exact image under ``x -> A x + b`` of an arc of :func:`_arc_geometry`.
+
+    The arc is ``point(t) = c + R(phi) (rx cos t, ry sin t)``, ``t`` from ``t0`` by ``dt``. The image
+    is ``A c + b + M (cos t, sin t)`` with ``M = A R(phi) diag(rx, ry)``. Write ``M = U S V^T`` with
+    ``U`` and ``V`` rotations (the reflection, if any, goes into the sign ``s`` of the second
+    singular value); then ``V^T (cos t, sin t) = (cos(t - a), sin(t - a))`` and a negative second
+    radius is the same ellipse run with the angle negated.
+    """
+    c, rx, ry, phi, t0, dt = geometry
+    if not all(math.isfinite(v) for v in (*c, rx, ry, phi, t0, dt)):
+        ends = f"{_xy(np.eye(2), np.zeros(2), arc.start)} to {_xy(np.eye(2), np.zeros(2), arc.end)}"
+        raise DrawingError(f"{where}: the elliptical arc from {ends} cannot be evaluated in double precision "
+                           "(it has no finite centre and radii): give it radii of a size comparable to the distance "
+                           "between its end points")
     R = np.array([[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]])
-    M = A @ R @ np.diag([arc.radius.real, arc.radius.imag])
+    M = A @ R @ np.diag([rx, ry])
     if not np.all(np.isfinite(M)):
         raise DrawingError(f"{where}: an elliptical arc's radii overflow under its transform; rescale the drawing")
     U, singular, Vt = np.linalg.svd(M)
@@ -324,55 +673,65 @@ def _arc_piece(arc: Arc, A: np.ndarray, b: np.ndarray, where: str) -> EllipticAr
     sign = float(su * sv)
     alpha = math.atan2(Vt[0, 1], Vt[0, 0])
     return EllipticArcPiece(
-        centre=_xy(A, b, arc.center), rx=float(singular[0]), ry=float(singular[1]),
-        rotation=math.atan2(U[1, 0], U[0, 0]),
-        theta0=sign * (math.radians(arc.theta) - alpha), dtheta=sign * math.radians(arc.delta),
+        centre=_xy(A, b, c), rx=float(singular[0]), ry=float(singular[1]),
+        rotation=math.atan2(U[1, 0], U[0, 0]), theta0=sign * (t0 - alpha), dtheta=sign * dt,
     )
 
 
-def _svg_piece(segment, A: np.ndarray, b: np.ndarray, where: str) -> Piece:
-    def finite(numbers) -> bool:
-        return all(math.isfinite(z.real) and math.isfinite(z.imag) for z in numbers)
+def _is_zero_length(segment) -> bool:
+    points = _points(segment)[:2] if isinstance(segment, se.Arc) else _points(segment)
+    return all(_same(q, points[0]) for q in points)
 
-    if isinstance(segment, Arc):
-        given = [segment.start, segment.end]
-        if finite(given) and not finite([segment.radius, segment.center, complex(segment.theta, segment.delta)]):
-            ends = f"{_xy(np.eye(2), np.zeros(2), segment.start)} to {_xy(np.eye(2), np.zeros(2), segment.end)}"
-            raise DrawingError(f"{where}: the elliptical arc from {ends} cannot be evaluated in double precision "
-                               "(svgpathtools finds no finite centre and radii): give it radii of a size comparable "
-                               "to the distance between its end points")
-    else:
-        given = segment.bpoints()
+
+def _is_flat_arc(segment) -> bool:
+    """An arc with a zero radius: SVG draws a straight line."""
+    if not isinstance(segment, se.Arc):
+        return False
+    try:
+        return _arc_geometry(segment) is None
+    except (ArithmeticError, ValueError, TypeError):
+        return False
+
+
+def _svg_piece(segment, A: np.ndarray, b: np.ndarray, where: str) -> Piece:
+    def finite(points) -> bool:
+        return all(math.isfinite(float(q[0])) and math.isfinite(float(q[1])) for q in points)
+
+    given = _points(segment)
     if not finite(given):
         raise DrawingError(f"{where}: non-finite coordinates (NaN or infinity); check the numbers in its path data")
     with np.errstate(all="ignore"):  # overflow shows up as non-finite samples, checked next
-        if isinstance(segment, Line):
+        if isinstance(segment, se.Linear) or _is_flat_arc(segment):
             piece = LinePiece(_xy(A, b, segment.start), _xy(A, b, segment.end))
-        elif isinstance(segment, (QuadraticBezier, CubicBezier)):
-            piece = BezierPiece(tuple(_xy(A, b, z) for z in segment.bpoints()))
+        elif isinstance(segment, (se.QuadraticBezier, se.CubicBezier)):
+            piece = BezierPiece(tuple(_xy(A, b, q) for q in given))
         else:
-            piece = _arc_piece(segment, A, b, where)
+            piece = _arc_piece(segment, _arc_geometry(segment), A, b, where)
         _check_samples(piece, where)
     return piece
 
 
-def _handle_notes(segment, label: str):
-    """Notes on Bézier handles of zero length: the derivative vanishes at that end."""
-    if isinstance(segment, (QuadraticBezier, CubicBezier)):
-        p = segment.bpoints()
+def _segment_notes(segment, label: str):
+    """Notes on Bézier handles of zero length (the derivative vanishes at that end) and zero radii."""
+    if isinstance(segment, (se.QuadraticBezier, se.CubicBezier)):
+        p = _points(segment)
         kind = "cubic" if len(p) == 4 else "quadratic"
         for end, (a, c) in (("start (t=0)", (p[0], p[1])), ("end (t=1)", (p[-1], p[-2]))):
-            if a == c:
+            if _same(a, c):
                 yield (f"{label}: {kind} Bézier with a zero-length handle at its {end}: its derivative "
                        "vanishes there and the tangent is only the limit direction")
+    elif _is_flat_arc(segment):
+        yield f"{label}: an elliptical arc with a zero radius is a straight line (as SVG draws it)"
 
 
 def _subpaths(segments: list) -> list[list]:
-    """Runs of segments each starting exactly where the previous one ends (what svgpathtools'
-    ``Path.continuous_subpaths`` does); a new ``M`` elsewhere starts a new run."""
-    runs = [[segments[0]]]
-    for previous, segment in zip(segments, segments[1:]):
-        if segment.start == previous.end:
+    """Runs of segments each starting exactly where the previous one ends; a new ``M`` elsewhere
+    starts a new run. ``Move`` is dropped, and so is a ``Z`` that is already at its start."""
+    drawn = [s for s in segments if not isinstance(s, se.Move)
+             and not (isinstance(s, se.Close) and _same(s.start, s.end))]
+    runs = [[drawn[0]]] if drawn else []
+    for previous, segment in zip(drawn, drawn[1:]):
+        if _same(segment.start, previous.end):
             runs[-1].append(segment)
         else:
             runs.append([segment])
@@ -392,20 +751,26 @@ def _check_samples(piece: Piece, where: str) -> None:
 
 
 def _assemble(entries, *, name: str, source: str, notes: list[str]) -> Drawing:
-    """Paths from ``(base name, where, svgpathtools segments, A, b)`` entries."""
+    """Paths from ``(unit, base name, where, svgelements segments, A, b)`` entries; the subpaths of
+    the entries of one unit (the shapes one ``<use>`` draws) are numbered together."""
+    runs_of = [_subpaths(segments) for _, _, _, segments, _, _ in entries]
+    total: dict = {}
+    for (unit, *_), runs in zip(entries, runs_of):
+        total[unit] = total.get(unit, 0) + len(runs)
+    counted: dict = {}
     built = []  # (name, pieces)
-    for base, where, segments, A, b in entries:
-        runs = _subpaths(segments)
+    for (unit, base, where, _, A, b), runs in zip(entries, runs_of):
         kept_runs = []
-        for r, run in enumerate(runs, start=1):
-            label = base if len(runs) == 1 else f"{base}#{r}"
+        for run in runs:
+            counted[unit] = counted.get(unit, 0) + 1
+            label = base if total[unit] == 1 else f"{base}#{counted[unit]}"
             pieces = []
             for i, segment in enumerate(run, start=1):
                 if _is_zero_length(segment):
                     notes.append(f"{where}: {label} segment {i} has zero length and was dropped")
                     continue
                 piece = _svg_piece(segment, A, b, f"{where}, {label} segment {i}")
-                notes.extend(_handle_notes(segment, f"{where}: {label} piece {len(pieces) + 1}"))
+                notes.extend(_segment_notes(segment, f"{where}: {label} piece {len(pieces) + 1}"))
                 pieces.append(piece)
             if pieces:
                 kept_runs.append((label, pieces))
@@ -429,7 +794,6 @@ def _assemble(entries, *, name: str, source: str, notes: list[str]) -> Drawing:
             notes.append(f"{label}: piece(s) {short} are shorter than {CLOSE_TOL:g} of the drawing's size "
                          "(kept; they may come from a rounding error before a 'z')")
     return Drawing(tuple(paths), name=name, source=source, unit="model", notes=tuple(notes))
-
 
 
 def _span(piece: Piece) -> float:
