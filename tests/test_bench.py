@@ -144,3 +144,11 @@ def test_bench_planning_on_the_paper_arc(capsys):
     assert row["reach_after"] <= 1.0 < row["reach_before"]
     out = capsys.readouterr().out
     assert "| paper-arc |" in out and "x flower" in out
+
+
+def test_bench_corpus_reports_each_outcome(capsys):
+    rows = _load("bench_corpus").main(["feather-activity.svg", "camr-rhodonea.svg", "--markdown"])
+    assert [r["outcome"] for r in rows] == ["verified", "refused"]
+    assert "camr-rhodonea.svg" in rows[1]["reason"]
+    out = capsys.readouterr().out
+    assert "verified 1 of 2 (50 %)" in out and "| camr-rhodonea.svg | refused |" in out

@@ -1,0 +1,82 @@
+"""Benchmark: every SVG of the corpus (tests/data/svg-corpus) traced end to end at 6 m / 1 mm and verified by replay.
+
+Run: python bench/bench_corpus.py [FILE ...] [--reach none|R] [--markdown]
+     (default: every file, the launch-glide-stop manoeuvres; ``--reach 0.49`` plans them instead)
+
+Per file, as ``skatetrace trace FILE --size 6m --tol 1mm`` does: read and fit (``resolve``), trace
+and verify (``trace_and_verify``), the wall time of each, and the outcome: verified, not
+verified (the first failing section's reason) or refused (the reader's or the fitter's reason).
+The summary gives the share verified, the share within 10 s, and the slowest files, as issue 17
+asks. Nothing is asserted about time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import skatetrace as st
+from skatetrace.errors import SkatetraceError
+
+CORPUS = Path(__file__).resolve().parent.parent / "tests" / "data" / "svg-corpus"
+
+
+def measure(name: str, reach: float | None) -> dict:
+    """One corpus file end to end: the outcome and the time of each stage."""
+    t0 = time.perf_counter()
+    try:
+        res = st.resolve(CORPUS / name, size="6m", tol="1mm")
+    except SkatetraceError as exc:
+        return {"file": name, "outcome": "refused", "reason": str(exc), "fit_s": time.perf_counter() - t0,
+                "trace_s": 0.0, "sections": 0}
+    t1 = time.perf_counter()
+    done = st.trace_and_verify(res.figure, res.figure.params, st.TraceOptions(speed=2.0, reach=reach))
+    failed = next((s.message for s in done.trace.sections if not s.success), done.message)
+    return {"file": name, "outcome": "verified" if done.success else "not verified",
+            "reason": "" if done.success else failed, "fit_s": t1 - t0, "trace_s": time.perf_counter() - t1,
+            "sections": len(done.trace.sections)}
+
+
+def summary(rows: list[dict]) -> str:
+    """The share verified and within 10 s, and the five slowest files."""
+    n = len(rows)
+    ok = sum(r["outcome"] == "verified" for r in rows)
+    fast = sum(r["fit_s"] + r["trace_s"] <= 10.0 for r in rows)
+    slow = sorted(rows, key=lambda r: -(r["fit_s"] + r["trace_s"]))[:5]
+    return (f"verified {ok} of {n} ({100.0 * ok / max(n, 1):.0f} %); within 10 s {fast} of {n}; slowest: "
+            + ", ".join(f"{r['file']} {r['fit_s'] + r['trace_s']:.0f} s" for r in slow))
+
+
+def markdown(rows: list[dict]) -> str:
+    head = "| file | outcome | sections | fit s | trace and verify s | reason |"
+    lines = [head, "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['file']} | {r['outcome']} | {r['sections']} | {r['fit_s']:.1f} | {r['trace_s']:.1f} "
+                     f"| {r['reason'][:90].replace('|', '/')} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> list[dict]:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("files", nargs="*")
+    ap.add_argument("--reach", default="none")
+    ap.add_argument("--markdown", action="store_true")
+    args = ap.parse_args(argv)
+    reach = None if args.reach == "none" else float(args.reach)
+    names = args.files or sorted(p.name for p in CORPUS.glob("*.svg"))
+    st.trace_and_verify(st.pattern("double-flower"), st.PAPER_PARAMS)  # compiled code warm
+    rows = []
+    for name in names:
+        row = measure(name, reach)
+        rows.append(row)
+        print(f"{name:46s} {row['outcome']:13s} {row['sections']:4d} fit {row['fit_s']:5.1f} s "
+              f"trace {row['trace_s']:6.1f} s {row['reason'][:70]}", flush=True)
+    print(summary(rows))
+    if args.markdown:
+        print(markdown(rows))
+    return rows
+
+
+if __name__ == "__main__":
+    main()
