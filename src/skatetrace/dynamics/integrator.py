@@ -37,7 +37,10 @@ from numba import njit
 from . import dop853 as rk
 from .model import SleighParams
 
-__all__ = ["DenseSolution", "IntegrationResult", "integrate_legs"]
+__all__ = ["DenseSolution", "IntegrationResult", "MAX_NFEV", "integrate_legs"]
+
+#: Default budget of right-hand-side evaluations of one integration (:func:`integrate_legs`).
+MAX_NFEV = 150_000
 
 # scipy's DOP853 tableau (:mod:`skatetrace.dynamics.dop853`, shared with the compiled replay)
 _NS, _A, _B, _C = rk.N_STAGES, rk.A, rk.B, rk.C
@@ -426,7 +429,7 @@ class IntegrationResult:
 
 def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_end: float, *,
                    rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
-                   max_nfev: int = 150_000, dense: bool = False, beta: float = 0.0) -> IntegrationResult:
+                   max_nfev: int = MAX_NFEV, dense: bool = False, beta: float = 0.0) -> IntegrationResult:
     """Integrate ``(p1, p2, a, b, s)`` from ``t = 0`` under ``u = alpha t + beta`` through legs.
 
     Leg ``k`` runs from ``|s| = s_start`` (``switches[k - 1]``, or 0 for the first leg) to
@@ -513,7 +516,7 @@ def integrate_legs(params: SleighParams, y0, kappas, switches, alpha: float, t_e
 
 def final_state(params: SleighParams, y0: np.ndarray, coef: np.ndarray, switches: np.ndarray, alpha: float,
                 t_end: float, *, rtol: float, atol: float, stop_event: bool = False, singular_limit: float = 0.0,
-                max_nfev: int = 150_000, beta: float = 0.0) -> tuple[str | None, float, np.ndarray]:
+                max_nfev: int = MAX_NFEV, beta: float = 0.0) -> tuple[str | None, float, np.ndarray]:
     """Where :func:`integrate_legs` ends, without its checks and bookkeeping (no dense output).
 
     For the many short integrations of a manoeuvre solve. ``coef`` must be a float array of shape

@@ -214,7 +214,8 @@ def finish_section(params: SleighParams, pieces, times, U, start: RestState, tar
         count += n
         if not ok:
             return None
-        # the end conditions: unmoved unless the last segment moved
+        # the end conditions: the forward difference of an unchanged residual (zero, NaN where it is
+        # NaN, as the columns were before) unless the last segment moved
         J[-6:] = (r[-6:] - r[-6:])[:, None] / steps
         for i in np.flatnonzero(moved):
             J[-6:, i] = (end_conditions(last[i, :5], last[i, 5]) - r[-6:]) / steps[i]

@@ -27,12 +27,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..dynamics.integrator import MAX_NFEV
 from ..dynamics.integrator import _run as _integrate
 
 __all__ = ["legs_from", "segment_end", "segment_ends", "jacobian_columns"]
 
-#: :func:`~skatetrace.dynamics.integrator.integrate_legs`' default budget of right-hand-side evaluations.
-_MAX_NFEV = 150_000
 #: Relative step of the forward differences (at least this absolute step).
 DIFF_STEP = 1e-7
 #: Binomial coefficients ``C(j, k)`` of the cubic's re-expansion, row ``j``.
@@ -128,7 +127,7 @@ def segment_end(M, m, I, y_start, sig, times, uu, i0, i1, ends, coef, rtol, atol
         alpha = (uu[k + 1] - uu[k]) / h
         _j, kappas, switches = legs_from(ends_k, coef, s_abs)
         y[4] = 0.0  # each interval from its own start
-        res = _integrate(M, m, I, y, kappas, switches, alpha, uu[k], h, rtol, atol, False, 0.0, _MAX_NFEV, False)
+        res = _integrate(M, m, I, y, kappas, switches, alpha, uu[k], h, rtol, atol, False, 0.0, MAX_NFEV, False)
         if res[0] < 0:
             return False
         yf = res[3]
