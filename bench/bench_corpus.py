@@ -5,7 +5,8 @@ Run: python bench/bench_corpus.py [FILE ...] [--reach none|R] [--markdown]
 
 Per file, as ``skatetrace trace FILE --size 6m --tol 1mm`` does: read and fit (``resolve``), trace
 and verify (``trace_and_verify``), the wall time of each, and the outcome: verified, not
-verified (the first failing section's reason) or refused (the reader's or the fitter's reason).
+verified (the first failing section's reason) or refused (the reader's or the fitter's reason),
+and the verdict with both halves: exact (verified) and whether a 1.7 m skater could do it.
 The summary gives the share verified, the share within 10 s, and the slowest files, as issue 17
 asks. Nothing is asserted about time.
 """
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import skatetrace as st
 from skatetrace.errors import SkatetraceError
+from skatetrace.verification.feasibility import HumanLimits
 
 CORPUS = Path(__file__).resolve().parent.parent / "tests" / "data" / "svg-corpus"
 
@@ -26,16 +28,17 @@ def measure(name: str, reach: float | None) -> dict:
     """One corpus file end to end: the outcome and the time of each stage."""
     t0 = time.perf_counter()
     try:
-        res = st.resolve(CORPUS / name, size="6m", tol="1mm")
+        res = st.resolve(CORPUS / name, size="6m", tol="1mm", height=1.7)
     except SkatetraceError as exc:
         return {"file": name, "outcome": "refused", "reason": str(exc), "fit_s": time.perf_counter() - t0,
-                "trace_s": 0.0, "sections": 0}
+                "trace_s": 0.0, "sections": 0, "verdict": "not traced"}
     t1 = time.perf_counter()
-    done = st.trace_and_verify(res.figure, res.figure.params, st.TraceOptions(speed=2.0, reach=reach))
+    done = st.trace_and_verify(res.figure, res.figure.params, st.TraceOptions(speed=2.0, reach=reach),
+                               limits=HumanLimits.for_skater(1.7, 60.0))
     failed = next((s.message for s in done.trace.sections if not s.success), done.message)
     return {"file": name, "outcome": "verified" if done.success else "not verified",
             "reason": "" if done.success else failed, "fit_s": t1 - t0, "trace_s": time.perf_counter() - t1,
-            "sections": len(done.trace.sections)}
+            "sections": len(done.trace.sections), "verdict": done.verdict}
 
 
 def summary(rows: list[dict]) -> str:
@@ -49,11 +52,11 @@ def summary(rows: list[dict]) -> str:
 
 
 def markdown(rows: list[dict]) -> str:
-    head = "| file | outcome | sections | fit s | trace and verify s | reason |"
-    lines = [head, "|---|---|---|---|---|---|"]
+    head = "| file | outcome | sections | fit s | trace and verify s | reason | verdict (verified · feasible) |"
+    lines = [head, "|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['file']} | {r['outcome']} | {r['sections']} | {r['fit_s']:.1f} | {r['trace_s']:.1f} "
-                     f"| {r['reason'][:90].replace('|', '/')} |")
+                     f"| {r['reason'][:90].replace('|', '/')} | {r['verdict'].replace('|', '/')} |")
     return "\n".join(lines)
 
 

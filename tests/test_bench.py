@@ -152,3 +152,4 @@ def test_bench_corpus_reports_each_outcome(capsys):
     assert "camr-rhodonea.svg" in rows[1]["reason"]
     out = capsys.readouterr().out
     assert "verified 1 of 2 (50 %)" in out and "| camr-rhodonea.svg | refused |" in out
+    assert rows[0]["verdict"].startswith("verified · ") and "feasible" in rows[0]["verdict"]
