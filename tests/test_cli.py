@@ -510,7 +510,8 @@ def test_tradeoff_sweeps_the_reach_and_marks_what_fails(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("args, why", [(["--reaches", "0.5m"], "physical length"), (["--reaches", "0,1"], "positive"),
-                                       (["--objective", "time"], "max_accel"), (["--max-accel", "-2"], "max-accel")])
+                                       (["--objective", "time"], "max_accel"), (["--max-accel", "-2"], "max-accel"),
+                                       (["--workers", "0"], "--workers must be a whole number from 1")])
 def test_tradeoff_refuses_what_cannot_be_swept(tmp_path, capsys, args, why):
     assert main(["tradeoff", str(_arc_file(tmp_path)), *args, "--out", str(tmp_path / "t")]) == 2
     assert why in capsys.readouterr().err

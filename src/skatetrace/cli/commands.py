@@ -66,6 +66,9 @@ def _add_planner_args(t) -> None:
                         "pace; default) or time (needs --max-accel)")
     g.add_argument("--max-accel", type=float,
                    help="largest acceleration of the mass on the ice (figure units per s^2, e.g. m/s^2)")
+    g.add_argument("--workers", type=int,
+                   help="processes the planner solves its independent programs in, side by side (default: every "
+                        "core; 1: one after another); the plan is the same either way")
 
 
 def _reach(args, unit: str) -> float | None:
@@ -155,6 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--speed", type=float, help="glide speed (default: 1 model unit, 2 m/s for figures in metres)")
     d.add_argument("--objective", choices=("effort", "time"), default="effort", help="as for 'trace'")
     d.add_argument("--max-accel", type=float, help="as for 'trace'")
+    d.add_argument("--workers", type=int, help="as for 'trace'")
     d.add_argument("--verify-tol", type=float, default=1e-6, help="as for 'trace'")
     d.add_argument("--no-plots", action="store_true", help="skip tradeoff.png")
     d.set_defaults(M=None, m=None, I=None)
@@ -348,7 +352,7 @@ def _trace(args) -> int:
                           I=args.I if args.I is not None else base.I)
     speed = args.speed if args.speed is not None else (2.0 if res.unit == "m" else 1.0)
     options = TraceOptions(speed=speed, reach=_reach(args, res.unit), objective=args.objective,
-                           max_accel=args.max_accel)
+                           max_accel=args.max_accel, workers=args.workers)
     if options.reach is not None:
         print(f"note: planning the mass's motion within {options.reach:.4g} {res.unit if res.unit == 'm' else 'model units'} "
               f"of the blade for least {options.objective} (--reach none: the launch-glide-stop manoeuvres)")
@@ -592,6 +596,8 @@ def _check_values(args) -> None:
                 raise SkatetraceError(f"{name}: {exc}") from None
     if args.command in ("trace", "tradeoff"):
         positive("--max-accel", args.max_accel)
+        if args.workers is not None and not 1 <= args.workers <= 1024:
+            raise SkatetraceError(f"--workers must be a whole number from 1 to 1024, got {args.workers!r}")
     if args.command == "trace":
         for name in ("M", "m", "I"):
             value = getattr(args, name)
@@ -624,7 +630,7 @@ def _tradeoff(args) -> int:
     params = res.figure.params or SleighParams()
     speed = args.speed if args.speed is not None else (2.0 if res.unit == "m" else 1.0)
     reaches = _reaches(args, res.unit)
-    options = TraceOptions(speed=speed, objective=args.objective, max_accel=args.max_accel,
+    options = TraceOptions(speed=speed, objective=args.objective, max_accel=args.max_accel, workers=args.workers,
                            reach=min(reaches))  # checks the objective's needs before any work
     _compile_once()
     unit = "m" if res.unit == "m" else "model units"

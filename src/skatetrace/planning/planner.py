@@ -41,6 +41,7 @@ from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceSta
 from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, solve_program
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
+from .pool import solve_programs
 
 __all__ = ["plan_figure", "curve_specs", "DURATION_PER_LENGTH", "TOP_SPEED"]
 
@@ -133,7 +134,44 @@ def _cusp_pins(specs, reach: float, closing_turn: float = 0.0) -> list[tuple]:
     return pins
 
 
-def _warm_start(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None, tuple[bool, ...]]:
+def _pin_key(q, sign, reach: float):
+    """A pin to 10 digits of the reach (+0.0 for -0.0), mirrored by ``sign``; None for a free end.
+
+    Pins of mirrored sections come from one cos and sin and differ by round-off (3.6e-17
+    against -3.6e-17 on the paragraph three).
+    """
+    return None if q is None else tuple(round(v / reach, 10) + 0.0 for v in (q[0], sign * q[1]))
+
+
+def _warm_key(spec: SectionSpec, start, end, reach: float, guessed: bool = False):
+    """What makes two warm-start programs the same up to a mirror, and the mirror's sign."""
+    key, sign = _shape_key(spec)
+    return (key, _pin_key(start, sign, reach), _pin_key(end, sign, reach), guessed), sign
+
+
+def _warm_options(popts: ProgramOptions, start, end) -> ProgramOptions:
+    return dataclasses.replace(popts, start_position=start, end_position=end, closing_turn=None)
+
+
+def _presolved(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: int | None) -> dict:
+    """The pinned warm-start programs of every curve (:func:`_warm_start`), each distinct one solved once.
+
+    Solved side by side (:func:`~skatetrace.planning.pool.solve_programs`); returns the cache
+    :func:`_warm_start` fills, keyed like it.
+    """
+    jobs: dict = {}
+    for specs, popts in curves:
+        closing = 0.0 if popts.closing_turn is None else popts.closing_turn
+        for spec, (start, end) in zip(specs, _cusp_pins(specs, popts.reach, closing)):
+            key, sign = _warm_key(spec, start, end, popts.reach)
+            if key not in jobs:
+                jobs[key] = (([dataclasses.replace(spec, turn=0.0)], _warm_options(popts, start, end), None, None), sign)
+    sols = solve_programs([job for job, _sign in jobs.values()], workers)
+    return {key: (sol, sign) for (key, (_job, sign)), sol in zip(jobs.items(), sols)}
+
+
+def _warm_start(specs, popts: ProgramOptions, solved: dict | None = None
+                ) -> tuple[ProgramSolution | None, int | None, tuple[bool, ...]]:
     """Every section on its own, the mass pinned at the cusps (:data:`_CUSP_AHEAD`): the start of the linked program.
 
     Pinned at the same place on both sides of every cusp, the sections chain with the mass's
@@ -141,20 +179,15 @@ def _warm_start(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, i
     pinned is planned with free ends. Sections with the same pieces and pins, or mirrored ones,
     share one solve: school figures repeat and mirror theirs. Returns the guess and, per section,
     whether its start continues the previous section's end (False for the first); or None and
-    the index of the first section that has no plan on its own.
+    the index of the first section that has no plan on its own. ``solved`` is a cache of the
+    programs already solved (:func:`_presolved`), filled with those solved here.
     """
-    solved: dict = {}
-
-    def pin_key(q, sign):
-        # to 10 digits of the reach, +0.0 for -0.0: pins of mirrored sections come from one cos and
-        # sin and differ by round-off (3.6e-17 against -3.6e-17 on the paragraph three)
-        return None if q is None else tuple(round(v / popts.reach, 10) + 0.0 for v in (q[0], sign * q[1]))
+    solved = {} if solved is None else solved
 
     def solve(spec, start, end, guess=None):
-        key, sign = _shape_key(spec)
-        key = (key, pin_key(start, sign), pin_key(end, sign), guess is not None)
+        key, sign = _warm_key(spec, start, end, popts.reach, guess is not None)
         if key not in solved:
-            opts = dataclasses.replace(popts, start_position=start, end_position=end, closing_turn=None)
+            opts = _warm_options(popts, start, end)
             if guess is not None:  # a free plan of the same section, pulled onto the pins
                 opts = _linked_options(opts)
             solved[key] = (solve_program([dataclasses.replace(spec, turn=0.0)], opts, guess=guess,
@@ -253,24 +286,35 @@ def _linked_options(popts: ProgramOptions) -> ProgramOptions:
     return dataclasses.replace(popts, barrier="monotone", mu_init=_LINKED_MU, max_iter=_LINKED_ITER)
 
 
-def _plan_curve(specs, popts: ProgramOptions) -> tuple[ProgramSolution | None, int | None, tuple[str, ...], bool]:
-    """The curve as one program from the warm start (:func:`_warm_start`), else the warm start itself.
+def _plan_curves(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: int | None
+                 ) -> list[tuple[ProgramSolution | None, int | None, tuple[str, ...], bool]]:
+    """Each curve as one program from its warm start (:func:`_warm_start`), else the warm start itself.
 
-    Returns the plan, the index of a section that has no plan on its own (else None), how each
-    section meets the one before (:func:`_finish_curve`) and whether the plan is the linked
-    program's. Where IPOPT cannot solve the linked program, the warm start's chain is the plan:
-    the mass's position on the ice is continuous wherever both sections were planned pinned at
-    the cusp (``"impulse"``), and jumps where one could not be (``"jump"``: reported, never hidden).
+    Returns per curve: the plan, the index of a section that has no plan on its own (else None),
+    how each section meets the one before (:func:`_finish_curve`) and whether the plan is the
+    linked program's. Where IPOPT cannot solve the linked program, the warm start's chain is the
+    plan: the mass's position on the ice is continuous wherever both sections were planned pinned
+    at the cusp (``"impulse"``), and jumps where one could not be (``"jump"``: reported, never
+    hidden). The distinct warm-start programs of all curves, then the curves' linked programs,
+    are solved side by side in ``workers`` processes (:mod:`skatetrace.planning.pool`).
     """
-    guess, bad, continues = _warm_start(specs, popts)
-    if guess is None:
-        return None, bad, (), False
-    if len(specs) > 1:
-        linked = solve_program(specs, _linked_options(popts), guess=guess, meshes=guess.meshes)
-        if linked.success:
-            return linked, None, ("start",) + ("impulse",) * (len(specs) - 1), True
-    links = tuple("start" if k == 0 else ("impulse" if c else "jump") for k, c in enumerate(continues))
-    return guess, None, links, False
+    solved = _presolved(curves, workers)
+    warm = [_warm_start(specs, popts, solved) for specs, popts in curves]
+    linking = [i for i, ((specs, _popts), (guess, _bad, _c)) in enumerate(zip(curves, warm))
+               if guess is not None and len(specs) > 1]
+    linked = dict(zip(linking, solve_programs([(curves[i][0], _linked_options(curves[i][1]), warm[i][0],
+                                                warm[i][0].meshes) for i in linking], workers)))
+    out = []
+    for i, (specs, _popts) in enumerate(curves):
+        guess, bad, continues = warm[i]
+        if guess is None:
+            out.append((None, bad, (), False))
+        elif i in linked and linked[i].success:
+            out.append((linked[i], None, ("start",) + ("impulse",) * (len(specs) - 1), True))
+        else:
+            links = tuple("start" if k == 0 else ("impulse" if c else "jump") for k, c in enumerate(continues))
+            out.append((guess, None, links, False))
+    return out
 
 
 def _replan(plan: ProgramSolution, specs, popts: ProgramOptions, links, linked: bool, guess=None,
@@ -312,12 +356,12 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
                 progress=None) -> FigureTrace:
     """Plan and finish exactly every section of ``figure`` with the mass within ``options.reach``.
 
-    Each curve is one program (:func:`_plan_curve`); each section is then finished exactly from
+    Each curve is one program (:func:`_plan_curves`); each section is then finished exactly from
     the exact end of the one before, the mass's position on the ice carried through the cusp
     (turned by its pivot or reversal) and, where the program made it continuous, its velocity.
     Each section's ``metrics`` say how it meets the one before: ``link`` (``"start"`` for a
     curve's first section, ``"impulse"`` where the mass's position is carried on and its velocity
-    may jump, ``"jump"`` where even its position could not be: see :func:`_plan_curve`), the
+    may jump, ``"jump"`` where even its position could not be: see :func:`_plan_curves`), the
     impulse on the mass in N s (``link_impulse``) and the jump of its position (``link_jump``,
     zero up to round-off unless ``"jump"``).
     Never raises for a figure that cannot be planned: the sections that fail say why.
@@ -330,10 +374,12 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     fn = sleigh_functions(popts.M, popts.m, popts.I)
     traces, starts, t = [], [], 0.0
     total = sum(len(c.sections()) for c in figure.curves)
-    for ci, curve in enumerate(figure.curves):
+    curves = []
+    for curve in figure.curves:
         specs, sections = curve_specs(curve)
-        curve_opts = dataclasses.replace(popts, closing_turn=_closing_turn(curve, sections))
-        plan, bad, links, linked = _plan_curve(specs, curve_opts)
+        curves.append((specs, sections, dataclasses.replace(popts, closing_turn=_closing_turn(curve, sections))))
+    plans = _plan_curves([(specs, curve_opts) for specs, _sections, curve_opts in curves], options.workers)
+    for ci, ((specs, sections, curve_opts), (plan, bad, links, linked)) in enumerate(zip(curves, plans)):
         if plan is None:
             curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
         else:

@@ -86,6 +86,19 @@ class TraceOptions:
         With ``"least-reach"``: how many more placements to try after the first that works (in
         the order of :func:`trace_section`). Sections of a few pieces have fewer placements than
         this and are searched completely; a fitted drawing's long section is not.
+    reach : float or None
+        Plan the mass's motion within this distance of the contact point
+        (:func:`skatetrace.plan_figure`); None keeps the launch-glide-stop manoeuvres.
+    objective : {"effort", "time"}
+        What the plan minimises: the integral of the squared force on the mass, or the duration
+        (which needs ``max_accel``).
+    max_accel, max_mass_speed : float or None
+        Optional bounds of the plan: the mass's acceleration on the ice, and its speed relative to
+        the blade.
+    workers : int or None
+        Processes in which the planner solves its independent programs side by side (the distinct
+        sections' warm starts, the curves' linked programs): None uses every core this process may
+        run on, 1 solves them one after another. The plan is the same either way.
     """
 
     speed: float = 1.0
@@ -102,6 +115,7 @@ class TraceOptions:
     objective: str = "effort"
     max_accel: float | None = None
     max_mass_speed: float | None = None
+    workers: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("speed", "maneuver_length", "glide_lateral", "residual_tol", "singular_limit", "excursion_limit",
@@ -122,6 +136,9 @@ class TraceOptions:
             raise ValueError(f"maneuver_length must be positive, got {self.maneuver_length!r}")
         if not (isinstance(self.search, int) and self.search >= 0):
             raise ValueError(f"search must be a whole number >= 0, got {self.search!r}")
+        if self.workers is not None and not (isinstance(self.workers, (int, np.integer)) and not isinstance(self.workers, bool)
+                                             and 1 <= self.workers <= 1024):
+            raise ValueError(f"workers must be a whole number from 1 to 1024, or None (every core), got {self.workers!r}")
         for name in ("reach", "max_accel", "max_mass_speed"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))

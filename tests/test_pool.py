@@ -1,0 +1,121 @@
+"""Independent programs solved side by side: the same answers as one after another, and never lost."""
+
+import threading
+from concurrent.futures.process import BrokenProcessPool
+
+import numpy as np
+import pytest
+
+import skatetrace as st
+from skatetrace.figures.figure import figure_from_dict
+from skatetrace.planning import pool
+from skatetrace.planning.planner import _cusp_pins, _program_options, _warm_options, curve_specs
+
+#: Two arcs joined by a pivot: two distinct sections, so two warm-start programs to share out.
+PIVOT = {"schema": "skatetrace.figure/1", "name": "two arcs", "params": {"M": 2, "m": 1, "I": 3},
+         "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 150},
+                                {"type": "arc", "radius": 1.5, "sweep_deg": -120}],
+                     "joins": [{"type": "cusp", "pivot_deg": -40}]}]}
+
+
+@pytest.fixture(scope="module")
+def jobs():
+    fig = figure_from_dict(PIVOT)
+    popts = _program_options(fig.params, st.TraceOptions(reach=1.0))
+    specs, _sections = curve_specs(fig.curves[0])
+    return [([spec], _warm_options(popts, start, end), None, None)
+            for spec, (start, end) in zip(specs, _cusp_pins(specs, popts.reach))]
+
+
+@pytest.fixture(scope="module")
+def serial(jobs):
+    return pool.solve_programs(jobs, workers=1)
+
+
+def _same(a, b):
+    assert a.success == b.success and a.iterations == b.iterations
+    for xa, xb in zip(a.states, b.states):
+        np.testing.assert_allclose(xa, xb, rtol=1e-9, atol=1e-12)
+
+
+def test_programs_solved_in_worker_processes_are_the_ones_solved_here(jobs, serial, monkeypatch):
+    made = []
+    real = pool.ProcessPoolExecutor
+
+    def spy(*args, **kwargs):
+        made.append(kwargs["max_workers"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(pool, "ProcessPoolExecutor", spy)
+    monkeypatch.setattr(pool, "_can_fork", lambda: True)
+    side_by_side = pool.solve_programs(jobs, workers=2)
+    assert made == [2]  # the pool was used, one process per program
+    assert all(s.success for s in serial)
+    for a, b in zip(serial, side_by_side):
+        _same(a, b)
+
+
+class _BrokenPool:
+    """A pool whose workers all die: every answer is lost with them."""
+
+    def __init__(self, *args, **kwargs):
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def submit(self, fn, job):
+        class Dead:
+            def result(self):
+                raise BrokenProcessPool("a worker died")
+        return Dead()
+
+
+def test_a_pool_that_breaks_loses_nothing(jobs, serial, monkeypatch):
+    monkeypatch.setattr(pool, "ProcessPoolExecutor", _BrokenPool)
+    monkeypatch.setattr(pool, "_can_fork", lambda: True)
+    again = pool.solve_programs(jobs, workers=2)
+    assert len(again) == len(jobs)
+    for a, b in zip(serial, again):
+        _same(a, b)
+
+
+def test_no_fork_while_other_threads_run(jobs, serial, monkeypatch):
+    # a fork copies only the calling thread: another thread's locks would stay held in the child
+    def refuse(*args, **kwargs):
+        raise AssertionError("forked while another thread ran")
+
+    monkeypatch.setattr(pool, "ProcessPoolExecutor", refuse)
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        again = pool.solve_programs(jobs, workers=2)
+    finally:
+        stop.set()
+        other.join()
+    for a, b in zip(serial, again):
+        _same(a, b)
+
+
+def test_a_plan_does_not_depend_on_the_workers():
+    fig = figure_from_dict(PIVOT)
+    one = st.plan_figure(fig, options=st.TraceOptions(reach=1.0, workers=1))
+    two = st.plan_figure(fig, options=st.TraceOptions(reach=1.0, workers=2))
+    assert one.success and two.success
+    for a, b in zip(one.sections, two.sections):
+        assert a.residuals == pytest.approx(b.residuals, rel=1e-6, abs=1e-13)
+        t = np.linspace(0.0, a.duration, 101)
+        va, vb = a.evaluate(t, geometry=False), b.evaluate(t, geometry=False)
+        for key in ("a", "b", "xi2"):
+            np.testing.assert_allclose(va[key], vb[key], rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("bad", [0, -1, 1025, 2.0, True, "2"])
+def test_workers_must_be_a_whole_number_of_processes(bad):
+    with pytest.raises(ValueError, match="workers"):
+        st.TraceOptions(workers=bad)
+
