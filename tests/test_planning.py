@@ -232,3 +232,53 @@ def test_a_plan_restarted_from_itself_is_found_again_at_once():
     # a handful of iterations back to the optimum (9 of 17 measured; IPOPT's path depends on the ordering)
     assert again.iterations < first.iterations and again.iterations <= 12
     assert again.objective == pytest.approx(first.objective, rel=1e-6)
+
+
+def test_a_curve_that_repeats_a_unit_of_sections_is_planned_as_that_unit():
+    import dataclasses
+
+    from skatetrace.planning.planner import _period, _program_options, _closing_turn, curve_specs
+
+    def period(name, bent=None):
+        fig = st.school_figure(name, height=1.7)
+        specs, sections = curve_specs(fig.curves[0])
+        if bent is not None:  # one cusp turned a little more
+            specs[bent] = dataclasses.replace(specs[bent], turn=specs[bent].turn + 1e-3)
+        popts = _program_options(fig.params, st.TraceOptions(reach=0.5, speed=2.0))
+        return _period(specs, dataclasses.replace(popts, closing_turn=_closing_turn(fig.curves[0], sections)))
+
+    # the other foot skates the same sections mirrored (paragraph figures) or as they are (change figures)
+    assert period("paragraph-double-three") == (5, -1)
+    assert period("change-double-three") == (3, 1)
+    assert period("circle-eight") == (1, -1)
+    assert period("paragraph-double-three", bent=7) is None
+    # an open curve has ends that no unit repeats; so has a curve whose sections differ
+    assert _period(curve_specs(figure_from_dict(CUSPS["pivot"]).curves[0])[0],
+                   _program_options(st.PAPER_PARAMS, st.TraceOptions(reach=1.0))) is None
+
+
+def test_the_units_plan_is_a_stationary_point_of_the_whole_curves_program():
+    # By the curve's symmetry the unit's optimum, repeated, is one of the whole program's: solved
+    # as a whole from it, IPOPT stays where it is, with twice the unit's effort.
+    import dataclasses
+
+    from skatetrace.planning.collocation import solve_program
+    from skatetrace.planning.planner import (_closing_turn, _linked_job, _linked_options, _program_options,
+                                             _warm_start, curve_specs)
+
+    fig = st.school_figure("loop", height=1.7)
+    specs, sections = curve_specs(fig.curves[0])
+    popts = _program_options(fig.params, st.TraceOptions(reach=0.5, speed=2.0))
+    popts = _linked_options(dataclasses.replace(popts, closing_turn=_closing_turn(fig.curves[0], sections)))
+    guess, _bad, _continues = _warm_start(specs, popts)
+    job, whole = _linked_job(specs, popts, guess, guess.meshes)
+    assert len(job[0]) == 1 and job[1].closing_mirror  # the loop's two halves are mirror images
+    unit = solve_program(job[0], job[1], guess=job[2], meshes=job[3])
+    plan = whole(unit)
+    assert unit.success and len(plan.states) == 2
+    np.testing.assert_allclose(plan.states[1][[0, 3]], -plan.states[0][[0, 3]])
+    again = solve_program(specs, popts, guess=plan, meshes=plan.meshes)
+    # (IPOPT's barrier takes its iterations to settle: the mass moves by 3e-9 of the reach, the effort by 1e-10)
+    assert again.success and again.objective == pytest.approx(2.0 * unit.objective, rel=1e-6)
+    moved = max(float(np.max(np.abs(a[2:4] - b[2:4]))) for a, b in zip(again.states, plan.states))
+    assert moved <= 1e-6 * popts.reach

@@ -58,7 +58,7 @@ def _add_planner_args(t) -> None:
     g.add_argument("--reach", default=None,
                    help="keep the moving mass within this distance of the blade's contact point, e.g. 0.5m (or 0.5 "
                         "in the figure's units), and plan its motion (CasADi/IPOPT, then finished exactly; "
-                        "2 to 16 s for a school figure); 'auto': "
+                        "1.5 to 9 s for a school figure); 'auto': "
                         f"{REACH_PER_HEIGHT:g} x --height, the trunk's length; 'none': the launch-glide-stop "
                         "manoeuvres (no bound); default auto for figures in metres, none in model units")
     g.add_argument("--objective", choices=("effort", "time"), default="effort",

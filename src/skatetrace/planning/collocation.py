@@ -87,7 +87,8 @@ class ProgramOptions:
     Besides the constraints of the module docstring: ``start_position`` and ``start_rates`` pin
     the first section's start (the mass's ``(a, b)`` and its rates), ``end_position`` the last
     section's end (the mass's ``(a, b)``); ``closing_turn`` links the
-    last section back to the first; the mesh has at least ``intervals`` per section and one per
+    last section back to the first, or with ``closing_mirror`` to the mirror image of the first
+    (``b`` and its rate reversed: the unit of a curve that repeats it mirrored); the mesh has at least ``intervals`` per section and one per
     ``interval_duration`` of it; ``min_speed`` is the floor of the blade's speed away from the
     rests; ``tol``, ``max_iter``, ``print_level``, ``barrier`` (IPOPT's ``mu_strategy``) and
     ``mu_init`` go to IPOPT (``max_iter`` 500: the linked programs that converged took at most 361
@@ -105,6 +106,7 @@ class ProgramOptions:
     continuous_velocity: bool = True
     impulse_time: float = 0.1
     closing_turn: float | None = None
+    closing_mirror: bool = False
     start_position: tuple[float, float] | None = None
     start_rates: tuple[float, float] | None = None
     end_position: tuple[float, float] | None = None
@@ -322,7 +324,7 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     if o.end_position is not None and prev_end is not None:
         prog.linear(prev_end[0][2:4] - ca.DM(list(o.end_position)))
     if o.closing_turn is not None and first_start is not None:
-        _link(prog, prev_end, first_start, o.closing_turn, ratesf, o)
+        _link(prog, prev_end, first_start, o.closing_turn, ratesf, o, mirror=o.closing_mirror)
     if o.objective == "time":
         prog.minimize(sum(durations))
     if guess is not None:
@@ -441,13 +443,17 @@ def _interval_function(fn, C, B, o) -> ca.Function:
     return ca.Function("interval", [z, cf, s0], [ca.vertcat(*defects), quad] + [ca.vertcat(*rows) for rows in paths])
 
 
-def _link(prog: SparseProgram, end, start, turn, ratesf, o) -> None:
-    """Position (and velocity) of the mass on the ice continuous from ``end`` to ``start``, or its jump penalised."""
+def _link(prog: SparseProgram, end, start, turn, ratesf, o, mirror: bool = False) -> None:
+    """Position (and velocity) of the mass on the ice continuous from ``end`` to ``start``, or its jump penalised.
+
+    With ``mirror``, to the mirror image of ``start`` (its ``b`` and ``bdot`` reversed).
+    """
     x_end, cf_e, s_e = end
     x_start, cf_s, s_s = start
-    prog.linear(x_start[2:4] - _rot(turn, x_end[2:4]))
+    flip = ca.DM([1.0, -1.0]) if mirror else ca.DM([1.0, 1.0])
+    prog.linear(flip * x_start[2:4] - _rot(turn, x_end[2:4]))
     v_end = _rot(turn, ratesf(x_end, 0.0, cf_e, s_e))
-    v_start = ratesf(x_start, 0.0, cf_s, s_s)
+    v_start = flip * ratesf(x_start, 0.0, cf_s, s_s)
     if o.continuous_velocity:
         prog.constrain(v_start - v_end)
     else:
