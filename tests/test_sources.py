@@ -263,3 +263,62 @@ def test_closing_moves_no_point_further_than_the_gap_and_keeps_the_end_tangent()
     assert np.allclose(p.pieces[-1].d1(1.0), back.d1(1.0)) and np.allclose(p.pieces[-1].d2(1.0), back.d2(1.0))
     assert np.allclose(p.pieces[-1].d1(0.0), back.d1(0.0))
     assert drawing.closed_within(0.005)[1] == {}  # not closer than the gap: left open
+
+
+def _notched_square(step: float = 4e-4):
+    """A 6 m square whose right side steps out by ``step`` halfway up (two right-angle corners)."""
+    from skatetrace.drawings.curves import Drawing, LinePiece, Path as DPath
+
+    pts = [(0.0, 0.0), (6.0, 0.0), (6.0, 3.0), (6.0 + step, 3.0), (6.0 + step, 6.0), (0.0, 6.0), (0.0, 0.0)]
+    pieces = tuple(LinePiece(a, b) for a, b in zip(pts[:-1], pts[1:]))
+    return Drawing((DPath(pieces, True, "p"),), unit="m")
+
+
+def test_a_tiny_piece_between_two_corners_is_absorbed_moving_no_point_further_than_half_its_length():
+    drawing = _notched_square()
+    absorbed, moves = drawing.absorbed(1e-3, 0.5)
+    assert moves == {"p": pytest.approx(2e-4)}
+    (p,) = absorbed.paths
+    (orig,) = drawing.paths
+    assert p.closed and len(p.pieces) == 5
+    # the neighbours meet at the tiny piece's midpoint, their tangents at both ends kept
+    before, after = p.pieces[1], p.pieces[2]
+    np.testing.assert_allclose(before.end, [6.0002, 3.0], atol=1e-15)
+    np.testing.assert_allclose(after.start, [6.0002, 3.0], atol=1e-15)
+    t = np.linspace(0.0, 1.0, 401)
+    for new, old in ((before, orig.pieces[1]), (after, orig.pieces[3])):
+        assert np.max(np.hypot(*(new.point(t) - old.point(t)))) <= 2e-4 + 1e-15
+        for end in (0.0, 1.0):
+            np.testing.assert_allclose(new.d1(end), old.d1(end), atol=1e-12)
+    # the rest untouched; the path still closes
+    assert p.pieces[0] is orig.pieces[0] and p.pieces[3] is orig.pieces[4]
+    np.testing.assert_allclose(p.pieces[-1].end, p.pieces[0].start, atol=1e-15)
+
+
+def test_what_is_not_absorbed():
+    from skatetrace.drawings.curves import Drawing, LinePiece, Path as DPath
+
+    # longer than the limit
+    assert _notched_square(2e-3).absorbed(1e-3, 0.5)[1] == {}
+    # smooth at one end: a short piece continuing a line is part of a run, which the fit spans
+    line = (LinePiece((0.0, 0.0), (6.0, 0.0)), LinePiece((6.0, 0.0), (6.0004, 0.0)), LinePiece((6.0004, 0.0), (6.0004, 6.0)))
+    assert Drawing((DPath(line, False, "q"),)).absorbed(1e-3, 0.5)[1] == {}
+    # an open path's first and last pieces
+    ends = (LinePiece((0.0, 0.0), (0.0, 0.0004)), LinePiece((0.0, 0.0004), (6.0, 0.0004)), LinePiece((6.0, 0.0004), (6.0, 6.0)))
+    assert Drawing((DPath(ends, False, "r"),)).absorbed(1e-3, 0.5)[1] == {}
+    # two tiny pieces in a row: the shorter goes, its neighbour (the other) stays
+    pts = [(0.0, 0.0), (6.0, 0.0), (6.0, 3.0), (6.0003, 3.0), (6.0003, 3.0004), (6.0, 6.0), (0.0, 6.0), (0.0, 0.0)]
+    pieces = tuple(LinePiece(a, b) for a, b in zip(pts[:-1], pts[1:]))
+    absorbed, moves = Drawing((DPath(pieces, True, "s"),)).absorbed(1e-3, 0.5)
+    assert moves == {"s": pytest.approx(1.5e-4)} and len(absorbed.paths[0].pieces) == 6
+
+
+def test_a_drawing_with_a_tiny_closing_piece_is_fitted_without_it_and_within_the_tolerance():
+    """Issue 17: closing lines of 0.25-1.2 mm at 6 m (icon sets) made sections too short to trace."""
+    corpus = Path(__file__).parent / "data" / "svg-corpus" / "simpleicons-markdown.svg"
+    r = resolve(str(corpus), size="6m", tol="1mm")
+    assert any(n.startswith("absorbed the pieces between two corners") for n in r.notes)
+    assert r.fit.success and r.fit.hausdorff <= 1e-3  # to the drawing as given, the move included
+    # no section is shorter than the tolerance any more (the 0.25 mm step was one)
+    shortest = min(sum(p.segment.length for p in s.pieces) for c in r.figure.curves for s in c.sections())
+    assert shortest > 1e-3

@@ -225,24 +225,28 @@ class AffinePiece(Piece):
 
 @dataclass(frozen=True, slots=True)
 class ShiftedEndPiece(Piece):
-    """``base`` with its end moved by ``delta`` and its start kept: ``base(t) + w(t) delta``, where
-    ``w = 10 t^3 - 15 t^4 + 6 t^5`` has zero slope and curvature at both ends, so the tangents and
-    curvatures there are the base's. No point moves by more than ``|delta|``."""
+    """``base`` with its end moved by ``delta`` (and its start by ``start_delta``, default kept):
+    ``base(t) + w(t) delta + (1 - w(t)) start_delta``, where ``w = 10 t^3 - 15 t^4 + 6 t^5`` has zero
+    slope and curvature at both ends, so the tangents and curvatures there are the base's. No point
+    moves by more than the larger of ``|delta|`` and ``|start_delta|``."""
 
     base: Piece
     delta: tuple[float, float]
+    start_delta: tuple[float, float] = (0.0, 0.0)
 
-    def _shift(self, t, w):
-        return np.outer(np.asarray(self.delta, float), w(_t(t)))
+    def _shift(self, t, w, constant: bool):
+        end, start = np.asarray(self.delta, float), np.asarray(self.start_delta, float)
+        out = np.outer(end - start, w(_t(t)))
+        return out + start[:, None] if constant else out
 
     def point(self, t):
-        return self.base.point(t) + self._shift(t, lambda u: u**3 * (10.0 - 15.0 * u + 6.0 * u**2))
+        return self.base.point(t) + self._shift(t, lambda u: u**3 * (10.0 - 15.0 * u + 6.0 * u**2), True)
 
     def d1(self, t):
-        return self.base.d1(t) + self._shift(t, lambda u: 30.0 * u**2 * (1.0 - u) ** 2)
+        return self.base.d1(t) + self._shift(t, lambda u: 30.0 * u**2 * (1.0 - u) ** 2, False)
 
     def d2(self, t):
-        return self.base.d2(t) + self._shift(t, lambda u: 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u))
+        return self.base.d2(t) + self._shift(t, lambda u: 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u), False)
 
 
 def curvature(piece: Piece, t) -> np.ndarray:
@@ -384,6 +388,27 @@ class Drawing:
             moved[p.name] = d
         return (replace(self, paths=tuple(out)) if moved else self), moved
 
+    def absorbed(self, limit: float, corner_deg: float) -> tuple["Drawing", dict[str, float]]:
+        """Every piece shorter than ``limit`` with a corner at both ends absorbed into its neighbours.
+
+        Such a piece is a section of its own, rest to rest, too short to launch and stop on (a
+        closing line of a millimetre in an icon scaled to metres). Its ends are merged at its
+        midpoint: the previous piece's end and the next piece's start move there
+        (:class:`ShiftedEndPiece`: their tangents and curvatures at both ends kept), so no point
+        of the drawing moves by more than half the piece's length; that is returned per path (its
+        largest), with the paths changed. A join turning by more than ``corner_deg`` degrees is a
+        corner. Left as they are: a piece next to one absorbed, a path of fewer than three
+        pieces, an open path's first and last pieces, and a piece whose absorption would fold a
+        neighbour (its speed below half its smallest).
+        """
+        out, moved = [], {}
+        for p in self.paths:
+            path, half = _absorbed(p, limit, corner_deg)
+            out.append(path)
+            if half > 0.0:
+                moved[p.name] = half
+        return (replace(self, paths=tuple(out)) if moved else self), moved
+
     def scaled_to(self, size: float, unit: str | None = None) -> "Drawing":
         """Uniformly scaled about the bounding-box centre so that its larger side is ``size``, moved to the origin."""
         if not (size > 0 and math.isfinite(size)):
@@ -401,3 +426,55 @@ class Drawing:
 
 def _as_points(seq: Sequence) -> np.ndarray:
     return np.asarray(seq, dtype=float)
+
+
+def _turn_deg(before: Piece, after: Piece) -> float:
+    """How far the tangent turns (degrees, unsigned) from the end of ``before`` to the start of ``after``."""
+    a, b = _col(before, "d1", 1.0), _col(after, "d1", 0.0)
+    return abs(math.degrees(math.atan2(a[0] * b[1] - a[1] * b[0], float(a @ b))))
+
+
+def _min_speed(piece: Piece) -> float:
+    return float(np.min(np.hypot(*piece.d1(np.linspace(0.0, 1.0, 65)))))
+
+
+def _absorbed(path: Path, limit: float, corner_deg: float) -> tuple[Path, float]:
+    """:meth:`Drawing.absorbed` on one path: the path and the largest distance a point of it moved."""
+    pieces = list(path.pieces)
+    n = len(pieces)
+    if n < 3 or not limit > 0.0:
+        return path, 0.0
+    lengths = [piece_length(pc) for pc in pieces]
+    start = [np.zeros(2) for _ in range(n)]  # how far each kept piece's start and end move
+    end = [np.zeros(2) for _ in range(n)]
+    gone: set[int] = set()
+    for i in sorted(range(n), key=lambda k: lengths[k]):
+        if lengths[i] >= limit:
+            break
+        if not path.closed and i in (0, n - 1):
+            continue
+        prev, nxt = (i - 1) % n, (i + 1) % n
+        if gone & {prev, nxt}:
+            continue  # a neighbour of an absorbed piece (a piece shared by two absorbed moves at both ends)
+        if min(_turn_deg(pieces[prev], pieces[i]), _turn_deg(pieces[i], pieces[nxt])) <= corner_deg:
+            continue  # smooth at one end: part of a run, which the fit spans
+        mid = 0.5 * (_col(pieces[i], "point", 0.0) + _col(pieces[i], "point", 1.0))
+        shifted_end = mid - _col(pieces[i], "point", 0.0)
+        shifted_start = mid - _col(pieces[i], "point", 1.0)
+        trial_prev = ShiftedEndPiece(pieces[prev], tuple(end[prev] + shifted_end), tuple(start[prev]))
+        trial_next = ShiftedEndPiece(pieces[nxt], tuple(end[nxt]), tuple(start[nxt] + shifted_start))
+        if (_min_speed(trial_prev) < 0.5 * _min_speed(pieces[prev])
+                or _min_speed(trial_next) < 0.5 * _min_speed(pieces[nxt])):
+            continue
+        end[prev] = end[prev] + shifted_end
+        start[nxt] = start[nxt] + shifted_start
+        gone.add(i)
+    if not gone:
+        return path, 0.0
+    kept = []
+    for k, pc in enumerate(pieces):
+        if k in gone:
+            continue
+        moved = bool(np.any(start[k]) or np.any(end[k]))
+        kept.append(ShiftedEndPiece(pc, tuple(map(float, end[k])), tuple(map(float, start[k]))) if moved else pc)
+    return Path(tuple(kept), path.closed, path.name), max(0.5 * lengths[i] for i in gone)

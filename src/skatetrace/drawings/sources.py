@@ -39,6 +39,9 @@ DEFAULT_REL_TOL = 1e-3
 DEFAULT_EXACT_REL_TOL = 1e-7
 #: Arc mode's corner tolerance (degrees): joins turning by less are smooth. Exact mode uses less.
 EXACT_MAX_CORNER_DEG = 0.5
+#: Share of the arc-fitting tolerance that absorbing tiny pieces may take (each moves the drawing by
+#: half its length, see :meth:`~skatetrace.drawings.curves.Drawing.absorbed`); the fit keeps the rest.
+ABSORB_SHARE = 2.0 / 3.0
 #: Smallest arc-fitting tolerance, as a fraction of the figure's size: the certified fit needs
 #: about 17 s per example drawing at 1e-9 and does not finish in minutes at 1e-12. Exact mode
 #: (curvature splines) reaches far smaller distances quickly.
@@ -232,8 +235,9 @@ def _pick(drawing: Drawing, paths) -> Drawing:
 
 
 def _with_gaps(fit, gaps: dict[str, float], tol: float):
-    """The fit of paths closed by up to ``gaps`` (by name) with its bounds to the drawing as given:
-    each such path's distances plus its gap (no point of it moved further), and the tolerance ``tol``."""
+    """The fit of paths closed (or with tiny pieces absorbed) moving them by up to ``gaps`` (by name), with its
+    bounds to the drawing as given: each such path's distances plus its gap (no point of it moved further),
+    and the tolerance ``tol``."""
     if not gaps:
         return fit
     paths = tuple(replace(pf, hausdorff=pf.hausdorff + gaps.get(pf.name, 0.0),
@@ -279,9 +283,26 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         notes.append(f"closed {len(gaps)} path(s) whose ends were within {tol_v:.3g} {unit} of their starts "
                      f"(up to {max(gaps.values()):.3g}; the fit's bound includes it): "
                      f"{', '.join(list(gaps)[:5])}{' ...' if len(gaps) > 5 else ''}")
+    # A piece between two corners far shorter than the tolerance is a section of its own, too short to
+    # launch and stop on: absorbed into its neighbours (moving the drawing by half its length), where
+    # the fit still succeeds in what is left of the tolerance; else the drawing is fitted as it is.
+    absorbed, moves = (fitted.absorbed(2.0 * ABSORB_SHARE * fit_tol, EXACT_MAX_CORNER_DEG)
+                       if exact is None or exact is False else (fitted, {}))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        fit = fit_drawing(fitted, fit_tol, method=method)
+        fit = None
+        if moves:
+            fit = fit_drawing(absorbed, fit_tol - max(moves.values()), method=method)
+            if fit.success:
+                fitted = absorbed
+                gaps = {name: gaps.get(name, 0.0) + moves.get(name, 0.0) for name in {*gaps, *moves}}
+                fit_tol -= max(moves.values())
+                notes.append(f"absorbed the pieces between two corners shorter than {2.0 * ABSORB_SHARE:.3g} x the "
+                             f"tolerance into their neighbours, moving the drawing by up to {max(moves.values()):.3g} "
+                             f"{unit} (the fit's bound includes it): {', '.join(list(moves)[:5])}"
+                             f"{' ...' if len(moves) > 5 else ''}")
+        if fit is None or not fit.success:
+            fit = fit_drawing(fitted, fit_tol, method=method)
     tight = _kink_corner_deg(drawing, tol_v)
     if not fit.success and tight < EXACT_MAX_CORNER_DEG:
         # The arc spline is tangent-continuous through a smooth join, so a join that turns by delta
