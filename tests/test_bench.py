@@ -153,3 +153,10 @@ def test_bench_corpus_reports_each_outcome(capsys):
     out = capsys.readouterr().out
     assert "verified 1 of 2 (50 %)" in out and "| camr-rhodonea.svg | refused |" in out
     assert rows[0]["verdict"].startswith("verified · ") and "feasible" in rows[0]["verdict"]
+
+
+def test_bench_corpus_traces_as_the_command_line_does_by_default(capsys):
+    # --reach auto: planned within the reach of a 1.7 m skater (the command line's default in metres)
+    rows = _load("bench_corpus").main(["bootstrap-dice-1.svg", "--reach", "auto"])
+    assert rows[0]["outcome"] == "verified" and rows[0]["reason"] == ""  # planned, no fallback needed
+    assert rows[0]["verdict"].startswith("verified · ")
