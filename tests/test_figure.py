@@ -189,6 +189,24 @@ def test_smooth_join_with_pivot_rejected_in_code():
         Join("cusp", math.inf)
 
 
+@pytest.mark.parametrize("deg", [1e12, -361.0, 720.0])
+def test_a_pivot_is_an_angle_of_at_most_a_whole_turn(deg):
+    # Issue 19: a pivot of 1e12 degrees made the replay NaN ("'x' must be finite", exit 2, no files)
+    data = one_curve(pieces=[{"type": "line", "length": 1.0}] * 2, joins=[{"type": "cusp", "pivot_deg": deg}])
+    with pytest.raises(FigureFormatError, match=r"joins\[0\].*pivot must be an angle of at most a whole turn"):
+        figure_from_dict(data)
+    with pytest.raises(FigureFormatError, match=r"at most a whole turn"):
+        Join("cusp", math.radians(deg))
+    assert Join("cusp", math.radians(359.0)).pivot == pytest.approx(math.radians(359.0))  # a turn less is fine
+
+
+def test_a_figure_file_with_a_byte_order_mark_is_read(tmp_path):
+    # as SVG and CSV files with one are (issue 19)
+    path = tmp_path / "bom.json"
+    path.write_bytes(b"\xef\xbb\xbf" + json.dumps(one_curve(pieces=[{"type": "line", "length": 1.0}])).encode())
+    assert load_figure(path).curves[0].pieces[0].length == pytest.approx(1.0)
+
+
 @pytest.mark.parametrize("join", [{"type": "smooth", "pivot_deg": 30.0}, {"type": "smooth", "reverse": True}])
 def test_smooth_join_with_pivot_rejected_in_json(join):
     # The JSON form must not silently drop a pivot or reversal on a smooth join.

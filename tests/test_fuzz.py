@@ -467,6 +467,8 @@ def test_cli_bad_numbers_exit_2_before_work(option, value, tmp_path, capsys, no_
     (["trace", "circle", "--verify-tol", "nan"], r"--verify-tol must be a positive finite"),  # NaN passed verify
     (["trace", "circle", "--rests", "bogus"], r"argument --rests: invalid choice"),  # was argparse's usage text
     (["trace", "circle", "--workers", "0"], r"--workers must be a whole number from 1 to 1024"),
+    (["trace", "circle", "--size", "-3m"], r"--size: a length must be positive"),  # was "expected one argument"
+    (["trace", "circle", "--speed", "-1"], r"--speed must be a positive number"),
     (["trace", "circle", "--workers", "2.5"], r"argument --workers: invalid int value"),
     (["trace", "circle", "--size", "abc"], r"--size: cannot read the length 'abc'"),  # was ignored
     (["fit", "line.csv", "--tol", "1e-12", "--size", "6"], r"below 1e-08"),

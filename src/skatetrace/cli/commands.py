@@ -687,11 +687,37 @@ def _finish_folder(folder) -> None:
               f"(so that the folder holds one run's results): {', '.join(removed)}")
 
 
+def _attached(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """``argv`` with a value that starts with ``-`` attached to its option (``--size -3m`` as ``--size=-3m``).
+
+    argparse takes ``-3m`` for an option and says "expected one argument"; attached, the value
+    reaches the option's own check, which says what is wrong with it.
+    """
+    takes_value, options = set(), set()
+    subparsers = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    for p in [parser] + [sp for a in subparsers for sp in a.choices.values()]:
+        for action in p._actions:
+            options.update(action.option_strings)
+            if action.option_strings and action.nargs is None and not isinstance(action, argparse._HelpAction):
+                takes_value.update(s for s in action.option_strings if s.startswith("--"))
+    out, i = [], 0
+    while i < len(argv):
+        word = argv[i]
+        if (word in takes_value and i + 1 < len(argv) and argv[i + 1].startswith("-") and argv[i + 1] not in options
+                and argv[i + 1] != "--"):
+            out.append(f"{word}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(word)
+        i += 1
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(_attached(parser, list(sys.argv[1:] if argv is None else argv)))
     except SystemExit as exc:
         return int(exc.code or 0)
     try:

@@ -66,6 +66,11 @@ class Join:
             raise FigureFormatError(f"join kind must be 'smooth' or 'cusp', got {self.kind!r}")
         if not (_is_real(self.pivot) and math.isfinite(self.pivot)):
             raise FigureFormatError(f"pivot must be finite (a number of radians), got {self.pivot!r}")
+        # a pivot turns the blade at rest: a whole turn or more is no pivot of a figure (1e12 degrees
+        # made the layout's headings lose every digit and the replay NaN)
+        if not abs(self.pivot) <= 2.0 * math.pi:
+            raise FigureFormatError(f"pivot must be an angle of at most a whole turn (-360 to 360 degrees, "
+                                    f"-2 pi to 2 pi radians), got {math.degrees(self.pivot):.6g} degrees")
         if not isinstance(self.reverse, (bool, np.bool_)):
             raise FigureFormatError(f"reverse must be True or False, got {self.reverse!r}")
         if self.kind == "smooth" and (self.pivot != 0.0 or self.reverse):
@@ -477,7 +482,10 @@ def _join_from_dict(d: Any, where: str) -> Join:
     reverse = d.get("reverse", False)
     if not isinstance(reverse, bool):
         raise FigureFormatError(f"{where}: reverse must be true or false, got {_show(reverse)}")
-    return Join("cusp", pivot, reverse)
+    try:
+        return Join("cusp", pivot, reverse)
+    except FigureFormatError as exc:
+        raise FigureFormatError(f"{where}: {exc}") from None
 
 
 def figure_from_dict(data: Any) -> Figure:
@@ -557,7 +565,7 @@ def load_figure(path: str | Path) -> Figure:
     """Read a figure from a JSON file."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is read as SVG and CSV files read it
     except OSError as exc:
         raise FigureFormatError(f"cannot read figure file {str(path)!r}: {exc.strerror}") from None
     except UnicodeDecodeError as exc:
