@@ -367,3 +367,15 @@ def test_spiral_pieces_round_trip_and_lay_out_continuously():
     # merging equal arcs leaves spirals alone
     assert c.merged().pieces == c.pieces
     assert fig.size() > 0
+
+
+def test_a_lone_surrogate_in_a_name_becomes_a_replacement_character(tmp_path):
+    # JSON allows "\ud800"; kept, it failed the first UTF-8 write after the result files (issue 19)
+    path = tmp_path / "sur.json"
+    path.write_text('{"schema": "skatetrace.figure/1", "name": "a\\ud800b", "description": "\\udc00", '
+                    '"curves": [{"name": "c\\ud800", "pieces": [{"type": "line", "length": 1}]}]}')
+    fig = load_figure(path)
+    assert fig.name == "a\ufffdb" and fig.description == "\ufffd" and fig.curves[0].name == "c\ufffd"
+    json.dumps(fig.to_dict()).encode("utf-8")  # writable
+    assert figure_from_dict({**one_curve(), "name": "x\ud83d\ude00"}).name == "x\U0001f600"  # a pair is a character
+

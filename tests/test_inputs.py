@@ -318,6 +318,8 @@ def test_no_warning_escapes_the_svg_parser_but_becomes_a_note():
     (svg('<g transform="scale(0)"><path id="p" d="M 0 0 L 1 1"/></g>'),
      r"<path id='p'>: its transform matrix\(0, 0, 0, 0, 0, 0\) is singular"),
     (svg('<g transform="scale(1,0)"><path id="p" d="M 0 0 A 1 1 0 0 1 1 1"/></g>'), r"is singular"),
+    # issue 19: this said "singular (determinant inf)"
+    (svg('<path id="p" transform="scale(1e200)" d="M 0 0 L 1 1"/>'), r"scales beyond floating point"),
     (svg('<g transform="rotate(abc)"><path d="M 0 0 L 1 1"/></g>'), r"a transform attribute cannot be read"),
     (svg('<circle id="c" cx="1" cy="1"/>'), r"<circle id='c'> has no extent: its size is zero, missing"),
     (svg('<rect id="r" width="3"/>'), r"<rect id='r'> has no extent: .*give it width and height > 0"),

@@ -483,15 +483,15 @@ def _symbol_viewport(use: ET.Element, symbol: ET.Element, viewport: tuple[float,
 
 
 def _check_transform(matrix: np.ndarray, where: str) -> None:
-    """Refuse a composed SVG transform ``[[a, c, e], [b, d, f], [0, 0, 1]]`` that is not invertible."""
+    """Refuse a composed SVG transform ``[[a, c, e], [b, d, f], [0, 0, 1]]`` that is not invertible or overflows."""
     A = matrix[:2, :2]
     scale = float(np.abs(A).max()) if np.all(np.isfinite(A)) else math.nan
-    det = float(np.linalg.det(A)) if math.isfinite(scale) else math.nan
+    det = float(A[0, 0]) * float(A[1, 1]) - float(A[0, 1]) * float(A[1, 0]) if math.isfinite(scale) else math.nan
     if not (math.isfinite(det) and abs(det) > 1e-12 * scale * scale):
         (a, c, e), (b, d, f) = matrix[0], matrix[1]
-        raise DrawingError(f"{where}: its transform matrix({a:g}, {b:g}, {c:g}, {d:g}, {e:g}, {f:g}) is singular "
-                           f"(determinant {det:g}): it would flatten the drawing onto a line or a point; "
-                           "fix the transform attribute of the element or of its groups")
+        raise DrawingError(f"{where}: its transform matrix({a:g}, {b:g}, {c:g}, {d:g}, {e:g}, {f:g}) " + (
+            f"is singular (determinant {det:g}): it would flatten the drawing onto a line or a point" if math.isfinite(det)
+            else "scales beyond floating point (its determinant overflows)") + "; fix the transform of it or its groups")
 
 
 # --- segments ----------------------------------------------------------------------------------------

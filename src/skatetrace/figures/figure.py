@@ -549,7 +549,7 @@ def figure_from_dict(data: Any) -> Figure:
             _number(start_in, "y", where) if "y" in start_in else 0.0,
             math.radians(_number(start_in, "heading_deg", where)) if "heading_deg" in start_in else 0.0,
         )
-        curve = Curve(pieces, joins, repeat, closing, start, str(c.get("name", f"curve{ci}")))
+        curve = Curve(pieces, joins, repeat, closing, start, _text(c.get("name", f"curve{ci}")))
         if "centre" in c:
             cen = c["centre"]
             if not (isinstance(cen, list) and len(cen) == 2):
@@ -557,8 +557,16 @@ def figure_from_dict(data: Any) -> Figure:
             cxy = {"x": cen[0], "y": cen[1]}
             curve = curve.centred_at(_number(cxy, "x", f"{where}.centre"), _number(cxy, "y", f"{where}.centre"))
         curves.append(curve)
-    return Figure(str(data.get("name", "figure")), tuple(curves), params,
-                  str(data.get("description", "")), str(data.get("provenance", "")))
+    return Figure(_text(data.get("name", "figure")), tuple(curves), params,
+                  _text(data.get("description", "")), _text(data.get("provenance", "")))
+
+
+def _text(value: Any) -> str:
+    """A name or note as text that every output can write: a lone surrogate (JSON allows ``\\ud800``) as U+FFFD.
+
+    Kept, it failed the first UTF-8 write after the result files were written (exit 2).
+    """
+    return str(value).encode("utf-16-le", "surrogatepass").decode("utf-16-le", "replace")
 
 
 def load_figure(path: str | Path) -> Figure:
