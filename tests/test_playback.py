@@ -55,3 +55,12 @@ def test_missing_or_broken_results_are_clear_errors(tmp_path, traced):
         load_playback(tmp_path)
     with pytest.raises(ValueError, match="at least one frame"):
         load_playback(traced).frame_rows(0)
+
+
+def test_a_controls_file_cut_short_names_its_line(traced, tmp_path):
+    # issue 19: a run killed while writing left a partial last row, read back as numpy's "inhomogeneous shape"
+    text = (traced / "controls.csv").read_text()
+    cut = tmp_path / "controls.csv"
+    cut.write_text(text[: len(text) // 2].rsplit(",", 3)[0])
+    with pytest.raises(ValueError, match=r"line \d+ has \d+ of the \d+ columns: the file is cut short"):
+        read_controls(cut)

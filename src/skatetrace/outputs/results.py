@@ -150,6 +150,10 @@ def read_controls(path: str | Path) -> dict[str, np.ndarray]:
     header = tuple(rows[0]) if rows else ()
     if header not in (CSV_COLUMNS, LEGACY_CSV_COLUMNS):
         raise ValueError(f"{path}: expected header {','.join(CSV_COLUMNS)}")
+    short = next((i for i, row in enumerate(rows[1:], start=2) if len(row) != len(header)), None)
+    if short is not None:  # a file cut short (a run killed while writing) ends in a partial row
+        raise ValueError(f"{path}: line {short} has {len(rows[short - 1])} of the {len(header)} columns: the file is "
+                         "cut short or edited; trace the figure again")
     data = np.array(rows[1:], dtype=float).reshape(-1, len(header))
     out = {k: data[:, i] for i, k in enumerate(header)}
     for k in _INT_COLUMNS:
