@@ -90,6 +90,7 @@ def traced():
     return {name: (ok, why) for name, ok, why in map(_end_to_end, FILES)}
 
 
+@pytest.mark.slow
 def test_the_corpus_is_traced_end_to_end_and_verified(traced):
     """Issue 17: at least 95 % of the corpus traced and verified at 6 m / 1 mm; every failure says why."""
     failed = {name: why for name, (ok, why) in traced.items() if not ok}
