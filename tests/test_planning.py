@@ -282,3 +282,33 @@ def test_the_units_plan_is_a_stationary_point_of_the_whole_curves_program():
     assert again.success and again.objective == pytest.approx(2.0 * unit.objective, rel=1e-6)
     moved = max(float(np.max(np.abs(a[2:4] - b[2:4]))) for a, b in zip(again.states, plan.states))
     assert moved <= 1e-6 * popts.reach
+
+
+def test_a_linked_program_out_of_iterations_is_finished_from_its_last_iterate(monkeypatch):
+    # The iterate may be crawling towards a plan far better than the chain's; the exact finish
+    # decides whether it is a plan: where every section finishes within the reach it is kept.
+    from skatetrace.planning import planner
+
+    kept = []
+    real = planner._unconverged
+
+    def spy(candidate, *args, **kwargs):
+        assert candidate.status == "Maximum_Iterations_Exceeded"
+        kept.append(real(candidate, *args, **kwargs))
+        return kept[-1]
+
+    monkeypatch.setattr(planner, "_unconverged", spy)
+    monkeypatch.setattr(planner, "_LINKED_ITER", 15)  # the loop's unit converges in about 20
+    fig = st.school_figure("loop", height=1.7)
+    trace = plan_figure(fig, options=st.TraceOptions(reach=0.5, speed=2.0))
+    assert len(kept) == 1 and kept[0] is not None and list(trace.sections) == kept[0]
+    for sec in trace.sections:
+        assert sec.success and max(sec.residuals.values()) <= 1e-10 and sec.metrics["reach"] <= 0.5
+    assert [sec.metrics["link"] for sec in trace.sections] == ["start", "impulse"]
+
+    # three iterations into the pivot's linked program its iterate no longer finishes (residuals
+    # of 1e-2): the chain is the plan, finished and mended as before
+    monkeypatch.setattr(planner, "_LINKED_ITER", 3)
+    chain = plan_figure(figure_from_dict(CUSPS["pivot"]), options=st.TraceOptions(reach=1.0))
+    assert len(kept) == 2 and kept[1] is None
+    assert chain.success and all(max(sec.residuals.values()) <= 1e-10 for sec in chain.sections)
