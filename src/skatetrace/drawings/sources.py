@@ -283,9 +283,9 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         notes.append(f"closed {len(gaps)} path(s) whose ends were within {tol_v:.3g} {unit} of their starts "
                      f"(up to {max(gaps.values()):.3g}; the fit's bound includes it): "
                      f"{', '.join(list(gaps)[:5])}{' ...' if len(gaps) > 5 else ''}")
-    # A piece between two corners far shorter than the tolerance is a section of its own, too short to
-    # launch and stop on: absorbed into its neighbours (moving the drawing by half its length), where
-    # the fit still succeeds in what is left of the tolerance; else the drawing is fitted as it is.
+    # A piece between two corners shorter than 2 ABSORB_SHARE times the tolerance is a section of its
+    # own, too short to launch and stop on: absorbed into its neighbours (moving the drawing by half its
+    # length), where the fit still succeeds in what is left of the tolerance; else fitted as it is.
     absorbed, moves = (fitted.absorbed(2.0 * ABSORB_SHARE * fit_tol, EXACT_MAX_CORNER_DEG)
                        if exact is None or exact is False else (fitted, {}))
     with warnings.catch_warnings(record=True) as caught:
