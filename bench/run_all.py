@@ -8,7 +8,9 @@ Scenarios (each a script in bench/, run in this one process, in this order):
    cold CLI start;
 3. ``bench_long_figure``: 200 distinct arcs, trace / sample / verify, failed sections listed;
 4. ``bench_scaling``: time versus number of pieces (1 to 1000 distinct arcs) and versus the fit
-   tolerance (examples/serpentine.svg).
+   tolerance (examples/serpentine.svg);
+5. ``bench_planning``: the school figures for a 1.7 m skater planned within 0.5 m (issue 15),
+   against their launch-glide-stop manoeuvres.
 
 ``--quick``: fewer repetitions, sizes <= 100, one traced tolerance (a few minutes). ``--smoke``: tiny
 cases (a straight line instead of the double flower, 3 arcs instead of 200, ...) for CI: the numbers
@@ -35,6 +37,7 @@ if str(HERE) not in sys.path:
 import bench_double_flower  # noqa: E402
 import bench_long_figure  # noqa: E402
 import bench_paper_arcs  # noqa: E402
+import bench_planning  # noqa: E402
 import bench_scaling  # noqa: E402
 
 # Arguments of each scenario's main() per mode.
@@ -44,22 +47,25 @@ MODES = {
         "double_flower": ["5", "--cold", "3"],
         "long_figure": ["--pieces", "200"],
         "scaling": ["--sizes", "1", "10", "100", "1000", "--budget", "600"],
+        "planning": ["--reach", "0.5"],
     },
     "quick": {
         "paper_arcs": ["1"],
         "double_flower": ["1", "--cold", "1"],
         "long_figure": ["--pieces", "200"],
         "scaling": ["--quick", "--runs", "1", "--tols", "1e-2", "1e-3", "1e-4", "--trace-tols", "1e-2", "--fit-runs", "1"],
+        "planning": ["three", "paragraph-double-three", "--reach", "0.5"],
     },
     "smoke": {
         "paper_arcs": ["1", "--maxiter", "1"],
         "double_flower": ["1", "--cold", "1", "--figure", "line"],
         "long_figure": ["--pieces", "3"],
         "scaling": ["--sizes", "1", "2", "--runs", "1", "--tols", "1e-2", "--trace-tols", "--fit-runs", "1"],
+        "planning": ["paper-arc"],
     },
 }
 SCRIPTS = {"paper_arcs": bench_paper_arcs, "double_flower": bench_double_flower, "long_figure": bench_long_figure,
-           "scaling": bench_scaling}
+           "scaling": bench_scaling, "planning": bench_planning}
 
 # The issue's targets.
 FLOWER_WARM_S = 0.5
@@ -68,6 +74,7 @@ PAPER_SPEEDUP = 100.0
 PAPER_RESIDUAL = 1e-10
 LONG_S = 5.0
 LINEAR_SLOPE = 1.1  # "linear": log-log slope over sizes >= 10 at most this
+PLAN_S = 10.0  # issue 15: each school figure planned (and traced and verified) within this, warm
 
 
 # ----------------------------------------------------------------------------------------------
@@ -103,7 +110,7 @@ def machine() -> dict:
 
 def versions() -> dict:
     out = {}
-    for name in ("skatetrace", "numpy", "scipy", "numba", "llvmlite", "matplotlib", "svgpathtools"):
+    for name in ("skatetrace", "numpy", "scipy", "numba", "llvmlite", "matplotlib", "svgelements", "defusedxml", "casadi"):
         try:
             out[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:
@@ -191,6 +198,14 @@ def targets(res: dict) -> list[dict]:
                                      f"{_f(s['all'], '.3f')})",
                          "ratio": f"slope {_f(slope, '.2f')} (linear = 1; met if <= {LINEAR_SLOPE})",
                          "met": None if math.isnan(slope) else slope <= LINEAR_SLOPE})
+    for r in res.get("planning", []):
+        within = r["duration_after"] > 0 and r["reach_after"] <= r["reach"]
+        rows.append({"key": f"plan_{r['figure']}",
+                     "target": f"{r['figure']} planned within {r['reach']:g}, plan + trace + verify <= {PLAN_S:g} s warm",
+                     "measured": f"{r['seconds']:.1f} s ({r['ratio']:.0f}x the double flower); mass within "
+                                 f"{r['reach_after']:.3g}, verified {'yes' if r['verified'] else 'NO'}",
+                     "ratio": f"{r['seconds'] / PLAN_S:.2g}x the target",
+                     "met": r["seconds"] <= PLAN_S and r["verified"] and within})
     return rows
 
 
@@ -459,6 +474,14 @@ def write_markdown(path: Path, res: dict, meta: dict) -> None:
             L += ["", f"Slope of log(arcs + lines) against log(1/tol): {_f(tol['slope_arcs'], '.3f')} (an arc "
                   f"spline's error falls as h^3, so about 1/3 is expected); of log(fit time): "
                   f"{_f(tol['slope_fit_time'], '.3f')}."]
+    pl = res.get("planning")
+    if pl:
+        L += ["", _scenario_header(meta, "planning", "5. Bounded-reach planning (issue 15)"),
+              "Each figure with the launch-glide-stop manoeuvres and planned within the reach, both replayed and "
+              "assessed from their exported rows; the plan time (plan, trace and verify, warm, in one process "
+              "with its worker processes) as a multiple of the double flower's warm trace-and-verify in the "
+              "same run.", ""]
+        L += bench_planning.markdown(pl).splitlines()
     L += [""] + robustness_section()
     L += [""] + profile_section(res, tgt)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -112,13 +112,14 @@ def test_run_all_smoke(tmp_path, capsys):
     text = (tmp_path / "RESULTS.md").read_text()
     for heading in ("## Machine", "## Versions", "## Targets (issue 6)", "## 1. The paper's three arcs",
                     "## 2. line end to end", "## 3. A long figure: 3 distinct arcs", "## 4. Scaling",
+                    "## 5. Bounded-reach planning (issue 15)", "| paper-arc |",
                     "## Profile and what would close the gap", "Smoke mode", "Load average"):
         assert heading in text
     for pkg in ("numpy", "scipy", "numba", "matplotlib", "skatetrace"):
         assert f"| {pkg} |" in text
     keys = {t["key"] for t in out["targets"]}
     assert {"flower_warm", "flower_cold", "paper_arc_1", "paper_arc_2", "paper_arc_3", "long_trace", "long_total",
-            "linear_trace", "linear_total"} <= keys
+            "linear_trace", "linear_total", "plan_paper-arc"} <= keys
     assert all(t["met"] in (True, False, None) for t in out["targets"])
     res = out["results"]
     assert all(r["exact_success"] and r["exact_residual"] <= 1e-10 for r in res["paper_arcs"])
