@@ -119,3 +119,20 @@ def test_workers_must_be_a_whole_number_of_processes(bad):
     with pytest.raises(ValueError, match="workers"):
         st.TraceOptions(workers=bad)
 
+
+
+def test_the_default_never_fills_a_many_core_machine(jobs, serial, monkeypatch):
+    made = []
+
+    class Spy(_BrokenPool):
+        def __init__(self, *args, max_workers, **kwargs):
+            made.append(max_workers)
+
+    monkeypatch.setattr(pool, "available_workers", lambda: 64)
+    monkeypatch.setattr(pool, "ProcessPoolExecutor", Spy)
+    monkeypatch.setattr(pool, "_can_fork", lambda: True)
+    many = [jobs[i % len(jobs)] for i in range(pool.DEFAULT_MAX_WORKERS + 1)]
+    again = pool.solve_programs(many)  # the spy's pool loses every answer: solved here instead
+    assert made == [pool.DEFAULT_MAX_WORKERS]
+    for a, b in zip(again[:2], serial):
+        _same(a, b)

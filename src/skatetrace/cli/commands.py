@@ -68,7 +68,7 @@ def _add_planner_args(t) -> None:
                    help="largest acceleration of the mass on the ice (figure units per s^2, e.g. m/s^2)")
     g.add_argument("--workers", type=int,
                    help="processes the planner solves its independent programs in, side by side (default: every "
-                        "core; 1: one after another); the plan is the same either way")
+                        "core, up to 8; 1: one after another); the plan is the same either way")
 
 
 def _reach(args, unit: str) -> float | None:

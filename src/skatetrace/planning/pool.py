@@ -24,7 +24,11 @@ from concurrent.futures.process import BrokenProcessPool
 
 from .collocation import ProgramSolution, solve_program
 
-__all__ = ["available_workers", "solve_programs"]
+__all__ = ["available_workers", "solve_programs", "DEFAULT_MAX_WORKERS"]
+
+#: Processes used when the caller does not say: each holds an IPOPT of up to a few hundred MB, so a
+#: many-core machine is not filled with them by default.
+DEFAULT_MAX_WORKERS = 8
 
 
 def available_workers() -> int:
@@ -52,15 +56,15 @@ def solve_programs(jobs: list[tuple], workers: int | None = None) -> list[Progra
     jobs : list of tuple
         ``(sections, options, guess, meshes)`` per program, as :func:`solve_program` takes them.
     workers : int or None
-        Processes to solve them in: None uses :func:`available_workers`; 1 (or a batch of one)
-        solves them here, one after another.
+        Processes to solve them in: None uses :func:`available_workers`, at most
+        :data:`DEFAULT_MAX_WORKERS`; 1 (or a batch of one) solves them here, one after another.
 
     Returns
     -------
     list of ProgramSolution
         One per job, in the order of ``jobs``.
     """
-    count = min(len(jobs), available_workers() if workers is None else int(workers))
+    count = min(len(jobs), min(available_workers(), DEFAULT_MAX_WORKERS) if workers is None else int(workers))
     results: list[ProgramSolution | None] = [None] * len(jobs)
     if count > 1 and _can_fork():
         try:

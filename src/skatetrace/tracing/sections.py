@@ -98,7 +98,7 @@ class TraceOptions:
     workers : int or None
         Processes in which the planner solves its independent programs side by side (the distinct
         sections' warm starts, the curves' linked programs): None uses every core this process may
-        run on, 1 solves them one after another. The plan is the same either way.
+        run on, up to 8; 1 solves them one after another. The plan is the same either way.
     """
 
     speed: float = 1.0
