@@ -13,7 +13,6 @@ command line does by default.
 import hashlib
 import json
 import multiprocessing
-import threading
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -81,10 +80,10 @@ def _end_to_end(name: str) -> tuple[str, bool, str]:
 
 @pytest.fixture(scope="module")
 def traced():
-    from skatetrace.planning.pool import available_workers
+    from skatetrace.planning.pool import _can_fork, available_workers
 
     workers = min(2, available_workers())
-    if workers > 1 and "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1:
+    if workers > 1 and _can_fork():
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
             return {name: (ok, why) for name, ok, why in pool.map(_end_to_end, FILES)}
     return {name: (ok, why) for name, ok, why in map(_end_to_end, FILES)}

@@ -117,19 +117,19 @@ def _rates(fn, X, spec: SectionSpec, at_end: bool):
 _CUSP_AHEAD = 0.6
 
 
-def _cusp_pins(specs, reach: float, closing_turn: float = 0.0) -> list[tuple]:
+def _cusp_pins(specs, reach: float, closing_turn: float | None = 0.0) -> list[tuple]:
     """Per section, the mass's position at its start and end in the warm start.
 
     At every cusp :data:`_CUSP_AHEAD` of the reach ahead of the contact point, and so at the
     curve's own start and end too, as if the curve were skated again (``closing_turn`` from its
-    end to its start: 0 for an open curve). Left free there, the ends went where the replay is
+    end to its start: 0 or None for an open curve). Left free there, the ends went where the replay is
     ill-conditioned: the rocker's and the bracket's final rests replayed at 3e-7 and 7e-8 of
     their fastest motion, against 7e-9 and 8e-9 pinned.
     """
     ahead = _CUSP_AHEAD * reach
     pins = []
     for k in range(len(specs)):
-        turn = specs[k + 1].turn if k + 1 < len(specs) else closing_turn
+        turn = specs[k + 1].turn if k + 1 < len(specs) else (closing_turn or 0.0)
         # the next section's start carried back through the cusp: (a, b)_end = R(-turn) (ahead, 0)
         pins.append(((ahead, 0.0), (ahead * math.cos(turn), -ahead * math.sin(turn))))
     return pins
@@ -162,8 +162,7 @@ def _presolved(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: 
     """
     jobs: dict = {}
     for specs, popts in curves:
-        closing = 0.0 if popts.closing_turn is None else popts.closing_turn
-        for spec, (start, end) in zip(specs, _cusp_pins(specs, popts.reach, closing)):
+        for spec, (start, end) in zip(specs, _cusp_pins(specs, popts.reach, popts.closing_turn)):
             key, sign = _warm_key(spec, start, end, popts.reach)
             if key not in jobs:
                 jobs[key] = (([dataclasses.replace(spec, turn=0.0)], _warm_options(popts, start, end), None, None), sign)
@@ -197,8 +196,7 @@ def _warm_start(specs, popts: ProgramOptions, solved: dict | None = None
         return sol if sign == solved_sign or not sol.success else _mirrored(sol)
 
     sols, pinned = [], []
-    closing = 0.0 if popts.closing_turn is None else popts.closing_turn
-    for k, (spec, (start, end)) in enumerate(zip(specs, _cusp_pins(specs, popts.reach, closing))):
+    for k, (spec, (start, end)) in enumerate(zip(specs, _cusp_pins(specs, popts.reach, popts.closing_turn))):
         sol, on_pins = solve(spec, start, end), True
         if not sol.success:
             # IPOPT may not find the pinned plan from the launch-glide-stop guess (paragraph three's
