@@ -186,6 +186,25 @@ def test_save_all_writes_five_pngs_and_checks_its_unit(flower, tmp_path):
     assert not (tmp_path / "x").exists()
 
 
+def test_the_plots_draw_a_bounded_number_of_rows_and_keep_every_rest(flower):
+    """Issue 19: a long figure's replay is cut to about PLOT_ROWS rows before it is drawn, keeping the
+    first and last row of every section (the rests the plots mark)."""
+    _, rep = flower
+    full = rep.replay
+    assert full.t.size > 1000
+    cut = plotting._thinned(rep, 500)
+    r = cut.replay
+    sections = np.unique(full.section).size
+    assert r.t.size <= 500 + 2 * sections
+    assert np.all(np.diff(r.t) >= 0)
+    for si in np.unique(full.section):
+        rows = full.t[full.section == si]
+        kept = r.t[r.section == si]
+        assert kept[0] == rows[0] and kept[-1] == rows[-1]
+    assert cut.max_deviation == rep.max_deviation  # only the rows drawn change
+    assert plotting._thinned(rep, full.t.size) is rep
+
+
 def _gids(ax, gid):
     return [ln for ln in ax.lines if ln.get_gid() == gid]
 

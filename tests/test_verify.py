@@ -103,3 +103,47 @@ def test_a_tolerance_that_would_pass_everything_is_refused(rel_tol):
         st.trace_and_verify(fig, rel_tol=rel_tol)
     with pytest.raises(ValueError, match=r"rel_tol must be a number in \(0, 1\]"):
         st.verify(st.trace_figure(fig), rel_tol=rel_tol)
+
+
+# --- bounded memory (issue 19): a long figure's replay and checks do not grow with its duration --------------
+
+_PEAK = """
+import json, resource, sys
+from skatetrace.cli import main
+code = main(["trace", sys.argv[1], "--out", sys.argv[2], "--no-plots", "--no-viewer"])
+print(json.dumps({"code": code, "peak_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))
+"""
+
+
+def _peak_kb(tmp_path, length: float) -> int:
+    import json
+    import subprocess
+    import sys
+
+    figure = tmp_path / f"line{length:g}.json"
+    figure.write_text(json.dumps({"curves": [{"pieces": [{"type": "line", "length": length}]}]}))
+    run = subprocess.run([sys.executable, "-c", _PEAK, str(figure), str(tmp_path / f"out{length:g}")],
+                         capture_output=True, text=True, timeout=600)
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    assert out["code"] == 0, run.stderr
+    return out["peak_kb"]
+
+
+def test_a_long_line_takes_little_more_memory_than_a_short_one(tmp_path):
+    """A line 1e4 long used 1.95 GB (issue 19), 930 MB of it in verification; a line of length 1 about 200 MB.
+
+    Measured against the short line in the same run (the imports' share differs between machines):
+    at most 100 MB more (about 70 MB here, from the bounded replay and checks)."""
+    short, long_ = _peak_kb(tmp_path, 1.0), _peak_kb(tmp_path, 1e4)
+    assert long_ - short <= 100_000, (short, long_)
+
+
+def test_the_replay_of_a_long_figure_is_bounded():
+    import skatetrace as st
+
+    figure = st.figure_from_dict({"curves": [{"pieces": [{"type": "line", "length": 1e5}]}]})
+    done = st.trace_and_verify(figure, figure.params, st.TraceOptions())
+    assert done.success
+    rep = done.report.replay
+    chunks = np.count_nonzero(np.diff(rep.t) == 0.0) + 1
+    assert rep.t.size <= verify_module.MAX_REPLAY_SAMPLES + 50 * chunks

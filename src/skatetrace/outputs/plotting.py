@@ -33,6 +33,10 @@ _UNITS = {
               "acceleration": "model length/time²", "energy": "model energy", "curvature": "1/model length"},
 }
 #: Legend outside the axes, top right: it never covers data.
+#: Rows of the replay drawn in each plot of :func:`save_all` at most (a long figure's replay holds a
+#: quarter of a million; an image 1100 pixels wide shows a few thousand).
+PLOT_ROWS = 20_000
+
 _OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0, "fontsize": 8}
 
 
@@ -214,6 +218,20 @@ def plot_energies(trace: FigureTrace, report: VerificationReport, ax=None, unit:
     return artists
 
 
+def _thinned(report: VerificationReport, rows: int) -> VerificationReport:
+    """``report`` with its replay cut to about ``rows`` rows spread evenly, keeping the first and last
+    row of every section (where the plots mark the rests): the memory a plot takes is then bounded."""
+    from dataclasses import replace
+
+    rep = report.replay
+    n = rep.t.size
+    if n <= rows:
+        return report
+    ends = np.flatnonzero(np.diff(rep.section) != 0)
+    keep = np.unique(np.concatenate([np.linspace(0, n - 1, rows).round().astype(int), ends, ends + 1]))
+    return replace(report, replay=rep.take(keep))
+
+
 def save_all(trace: FigureTrace, report: VerificationReport, out, *, unit: str = "model") -> list:
     """Write figure.png, controls.png, speed.png, mass_path.png and energies.png into ``out``.
 
@@ -238,6 +256,7 @@ def save_all(trace: FigureTrace, report: VerificationReport, out, *, unit: str =
 
     axis_units(unit)  # a bad unit fails before anything is drawn
     out = Path(out)
+    report = _thinned(report, PLOT_ROWS)
     written = []
     for name, fn, size in (("figure", plot_figure, (10, 8)), ("controls", plot_controls, (12, 4)),
                            ("speed", plot_speed, (12, 4)), ("mass_path", plot_mass_path, (9.5, 7.5)),

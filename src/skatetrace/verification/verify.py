@@ -40,8 +40,8 @@ __all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "ver
 
 #: Bounds on the dense samples of the replay and of the figure, so that memory stays bounded for
 #: any figure size and speed (figures of ordinary size and duration stay far below them).
-MAX_REPLAY_SAMPLES = 2_000_000
-MAX_FIGURE_SAMPLES = 2_000_000
+MAX_REPLAY_SAMPLES = 200_000
+MAX_FIGURE_SAMPLES = 100_000
 
 
 _SAMPLED = ("a", "b", "adot", "bdot", "p1", "p2", "s", "xi1", "xi2", "segment")
@@ -384,6 +384,8 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
         if not sec.phases or not idx.size:
             out[si] = ({"section": si, "traced": False, "passed": False, "message": sec.message}, [])
             continue
+        if idx[-1] - idx[0] + 1 == idx.size:  # a section's rows are consecutive: views, not copies
+            idx = slice(int(idx[0]), int(idx[-1]) + 1)
         sub = rep.take(idx)
         sxi1, sxi2 = xi1[idx], xi2[idx]
         pts = sub.state[3:5]
@@ -398,7 +400,7 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
             # (one sample more each side): where two pieces pass close to each other, as at the
             # waist of a figure eight, the nearest sample may otherwise belong to the other one.
             own = np.flatnonzero(sub.piece == p.index)
-            mp = np.zeros(idx.size, dtype=bool)
+            mp = np.zeros(sub.t.size, dtype=bool)
             if own.size:
                 mp[max(own[0] - 1, 0):own[-1] + 2] = True
             else:
