@@ -312,3 +312,32 @@ def test_a_linked_program_out_of_iterations_is_finished_from_its_last_iterate(mo
     chain = plan_figure(figure_from_dict(CUSPS["pivot"]), options=st.TraceOptions(reach=1.0))
     assert len(kept) == 2 and kept[1] is None
     assert chain.success and all(max(sec.residuals.values()) <= 1e-10 for sec in chain.sections)
+
+
+def test_a_program_too_large_to_build_is_refused_as_data(monkeypatch):
+    """Issue 19: a line 1000 km long at --reach asked CasADi for 10^8 unknowns and died of bad_alloc
+    after taking 5 GB; the program's size is now checked before anything is built."""
+    from skatetrace.planning import collocation
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("a program too large must not be built")
+
+    monkeypatch.setattr(collocation, "SparseProgram", no_build)
+    figure = figure_from_dict({"curves": [{"pieces": [{"type": "line", "length": 1e6}]}]})
+    trace = plan_figure(figure, figure.params, st.TraceOptions(reach=0.5, workers=1))
+    (sec,) = trace.sections
+    assert not sec.success and sec.status is st.TraceStatus.NOT_PLANNED
+    assert "more than the 400,000 allowed" in sec.message and "--reach none" in sec.message
+
+
+def test_the_size_check_passes_every_school_figure():
+    from skatetrace.planning.collocation import program_too_large
+    from skatetrace.planning.planner import _program_options, curve_specs
+
+    options = st.TraceOptions(reach=0.5)
+    for name in ("paragraph-double-three", "change-double-three", "serpentine"):
+        figure = st.school_figure(name, height=1.7)
+        popts = _program_options(figure.params, options)
+        for curve in figure.curves:
+            specs, _ = curve_specs(curve)
+            assert program_too_large(specs, popts) is None

@@ -28,13 +28,18 @@ import numpy as np
 from .nlp import SparseProgram
 from .symbolic import sleigh_functions
 
-__all__ = ["PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "solve_program"]
+__all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "program_too_large",
+           "solve_program"]
 
 _DEGREE = 3
 #: IPOPT's ends that may still leave a feasible point, and the largest constraint violation of one.
 _STALLED = ("Error_In_Step_Computation", "Maximum_Iterations_Exceeded", "Restoration_Failed",
             "Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Level")
 _FEASIBLE = 1e-8
+#: The most unknowns a program may have. The school figures' largest has about 10,000 and a drawing's
+#: some tens of thousands; each takes CasADi and IPOPT about a kilobyte, so a section lasting ten
+#: thousand times a school figure's (a straight line a thousand kilometres long) would take gigabytes.
+MAX_UNKNOWNS = 400_000
 
 
 def _radau() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -247,6 +252,22 @@ def _layout(sections: list[SectionSpec], o: ProgramOptions, meshes) -> tuple[lis
     return out, n
 
 
+def _too_large(layout, n: int, o: ProgramOptions) -> str | None:
+    """Why a program of ``n`` unknowns is not built (more than :data:`MAX_UNKNOWNS`), or None."""
+    if n <= MAX_UNKNOWNS:
+        return None
+    longest = max(duration for duration, *_ in layout)
+    return (f"the program would have {n:,} unknowns, more than the {MAX_UNKNOWNS:,} allowed (a section lasts "
+            f"{longest:.3g} of the planner's time units, at one mesh interval per {o.interval_duration:g}): trace "
+            "a figure this long with the launch-glide-stop manoeuvres (--reach none), or in parts")
+
+
+def program_too_large(sections: list[SectionSpec], options: ProgramOptions) -> str | None:
+    """Why :func:`solve_program` would refuse the program of ``sections`` for its size, or None."""
+    layout, n = _layout(sections, options, None)
+    return _too_large(layout, n, options)
+
+
 def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=None, meshes=None) -> ProgramSolution:
     """Build and solve the program of a chain of sections (one curve, or the unit of a repeated one).
 
@@ -263,6 +284,9 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     tau, C, B = _radau()
     interval = _interval_function(fn, C, B, o)
     layout, n = _layout(sections, o, meshes)
+    refused = _too_large(layout, n, o)
+    if refused is not None:
+        return ProgramSolution(success=False, status="too_large", message=refused)
     prog = SparseProgram(n)
     reach2 = o.reach * o.reach
     prev_end = None  # (x, cf, s0) at the end of the previous section

@@ -39,7 +39,7 @@ from ..figures.figure import Figure
 from ..figures.geometry import end_pose
 from ..tracing.maneuver import _singular_distances
 from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceStatus, _Phase, _with_metrics
-from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, solve_program
+from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, program_too_large, solve_program
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
 from .pool import solve_programs
@@ -552,7 +552,14 @@ def _finish_curve(plan, links, specs, sections, ci, params, options, fn) -> list
 
 
 def _infeasible_curve(specs, sections, bad: int, ci, params, options, popts) -> list[SectionTrace]:
-    """Every section of a curve failed, the one without a plan of its own saying which reach would do."""
+    """Every section of a curve failed, the one without a plan of its own saying which reach would do
+    (or that its program is too large to build)."""
+    refused = program_too_large([specs[bad]], popts)
+    if refused is not None:
+        other = f"section {bad} of this curve cannot be planned"
+        return [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED,
+                        f"reach {options.reach:.4g}: not planned: " + (refused if k == bad else other))
+                for k, sec in enumerate(sections)]
     wider = smallest_reach(specs[bad], popts)
     scale = options.reach / popts.reach  # the program's reach is inside the margin
     hint = (f"; on its own it plans within {wider * scale:.4g}" if wider is not None else
