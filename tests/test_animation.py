@@ -129,10 +129,17 @@ def test_gif_frames_follow_the_clock(playback, tmp_path):
     ({"size_px": "800x600"}, "whole pixels"),
     ({"size_px": (8, 600)}, "between 16 and"),
     ({"fps": 1, "duration": 0.4}, "has no frames"),
+    # issue 19: an absurd video is refused up front, naming the number of frames and the limit
+    ({"duration": 1e9}, r"2\.5e\+10 frames, more than the 90,000 allowed"),
+    ({"fps": 1e9}, r"1e\+09 fps .* within 90,000 frames"),
 ])
 def test_bad_options_are_clear_errors(kwargs, match):
     with pytest.raises(ValueError, match=match):
         AnimationOptions(**kwargs)
+
+
+def test_the_longest_video_allowed_is_accepted():
+    assert AnimationOptions(fps=25, duration=animation.MAX_FRAMES / 25).duration == animation.MAX_FRAMES / 25
 
 
 def test_bad_paths_and_folders_are_clear_errors(playback, tmp_path):

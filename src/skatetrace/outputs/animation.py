@@ -54,6 +54,8 @@ _TRACE_SAMPLES = 3000      # the growing trace is drawn from at most this many s
 _TRAIL_SAMPLES = 60        # points along the mass's fading trail
 _TRAIL_CAP = 0.1           # the trail covers at most this fraction of the video
 _MAX_PIXELS = 8192
+#: The most frames a video may have: an hour at 25 fps (each frame is drawn in some tens of milliseconds).
+MAX_FRAMES = 90_000
 
 _TARGET, _TRACE, _SKATE, _TOE, _MASS, _LINK = "0.83", "#1f5fa8", "#1a1a1a", "#d62728", "#f28e1c", "0.45"
 _REST, _PASSED = "0.55", "#d62728"
@@ -124,6 +126,13 @@ class AnimationOptions:
         if self.duration is not None and round(self.fps * self.duration) < 1:
             raise ValueError(f"a video of {self.duration:g} s at {self.fps:g} fps has no frames: "
                              "give a longer duration or a higher fps")
+        if self.duration is not None and self.fps * self.duration > MAX_FRAMES:
+            raise ValueError(f"a video of {self.duration:g} s at {self.fps:g} fps would have "
+                             f"{self.fps * self.duration:.3g} frames, more than the {MAX_FRAMES:,} allowed: give a "
+                             "shorter duration or a lower fps")
+        if self.fps * MIN_SECONDS > MAX_FRAMES:
+            raise ValueError(f"{self.fps:g} fps is more than a video of at least {MIN_SECONDS:g} s can have within "
+                             f"{MAX_FRAMES:,} frames: give a lower fps")
 
     def seconds(self, playback: Playback) -> float:
         """Length of the video of ``playback`` in seconds."""
