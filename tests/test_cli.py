@@ -246,6 +246,23 @@ def test_out_that_cannot_be_a_folder_exits_2_before_any_work(tmp_path, capsys, m
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
 
 
+@pytest.mark.parametrize("argv, match", [
+    (["trace", "circle", "--out", ""], "--out: '' names no folder"),
+    (["trace", "circle", "--out", "  "], "--out: '  ' names no folder"),
+    (["fit", str(EXAMPLES / "points-eight.csv"), "--out", ""], "--out: '' names no folder"),
+    (["animate", "results", "-o", ""], "-o: '' names no file"),
+    (["view", "results", "-o", ""], "-o: '' names no file"),
+])
+def test_an_empty_output_name_is_refused_not_read_as_the_current_folder(tmp_path, capsys, monkeypatch, argv, match):
+    """Issue 19: ``--out ""`` wrote every file into the current folder."""
+    _no_work(monkeypatch)
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("skatetrace: error: ") and match in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_out_without_write_permission_exits_2_before_any_work(tmp_path, capsys, monkeypatch):
     import tempfile
 
@@ -515,3 +532,31 @@ def test_tradeoff_sweeps_the_reach_and_marks_what_fails(tmp_path, capsys):
 def test_tradeoff_refuses_what_cannot_be_swept(tmp_path, capsys, args, why):
     assert main(["tradeoff", str(_arc_file(tmp_path)), *args, "--out", str(tmp_path / "t")]) == 2
     assert why in capsys.readouterr().err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("whom", ["group", "parent"])
+def test_ctrl_c_stops_the_planner_and_its_workers_with_one_line(tmp_path, whom):
+    """Issue 19: CasADi turned Ctrl-C inside IPOPT into a failed solve and the planner went on to the
+    end. Now the run stops: exit 130, one line, no traceback (from the workers either), no process left.
+    ``group``: a terminal's Ctrl-C reaches every process; ``parent``: only the command's own."""
+    import signal
+    import time
+
+    run = subprocess.Popen([sys.executable, "-m", "skatetrace", "trace", "school:paragraph-double-three",
+                            "--out", str(tmp_path / "out"), "--no-plots", "--no-viewer"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    assert run.stdout.readline().startswith("note:")  # the figure is read: planning has begun
+    time.sleep(2.0)
+    assert run.poll() is None, "the run ended before it could be interrupted"
+    if whom == "group":
+        os.killpg(run.pid, signal.SIGINT)
+    else:
+        run.send_signal(signal.SIGINT)
+    _, err = run.communicate(timeout=120)
+    assert run.returncode == 130, err
+    lines = [ln for ln in err.replace("\r", "\n").splitlines() if ln.strip() and not ln.startswith("CasADi")]
+    assert lines[-1] == "skatetrace: interrupted" and "Traceback" not in err, err
+    time.sleep(0.5)
+    with pytest.raises(ProcessLookupError):
+        os.killpg(run.pid, 0)  # no worker left behind

@@ -486,8 +486,8 @@ def _animate(args) -> int:
     from ..outputs.playback import load_playback
 
     t0 = time.perf_counter()
+    check_output_file(args.output, label="-o", suffixes=SUFFIXES + STILL_SUFFIXES, create_parent=False)
     out = Path(args.output)
-    check_output_file(out, label="-o", suffixes=SUFFIXES + STILL_SUFFIXES, create_parent=False)
     if args.time is not None and out.suffix.lower() not in STILL_SUFFIXES:
         raise SkatetraceError(f"--time picks the one frame of a still: use it with -o NAME.png (a "
                               f"{out.suffix.lower()} plays the whole figure)")
@@ -507,12 +507,14 @@ def _animate(args) -> int:
 
 
 def _view(args) -> int:
-    from ..outputs.folder import adopt, check_output_file
+    from ..outputs.folder import adopt, check_output_file, output_path
     from ..outputs.playback import load_playback
     from ..outputs.viewer import write_viewer
 
     t0 = time.perf_counter()
     src = Path(args.source)
+    if args.output is not None:
+        output_path(args.output, "-o")  # an empty name is refused, not read as the current folder
     target = Path(args.output) if args.output else (src.parent if src.suffix == ".json" else src) / "viewer.html"
     if target.is_dir():
         target = target / "viewer.html"
@@ -736,6 +738,9 @@ def main(argv: list[str] | None = None) -> int:
     except (SkatetraceError, ValueError, TypeError, OSError) as exc:
         print(f"skatetrace: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("\nskatetrace: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -18,7 +18,7 @@ from typing import Any
 from ..errors import SkatetraceError
 from .files import atomic_write, dumps_json, record_writes
 
-__all__ = ["MANIFEST", "check_output_folder", "check_output_file", "OutputFolder", "adopt"]
+__all__ = ["MANIFEST", "check_output_folder", "check_output_file", "output_path", "OutputFolder", "adopt"]
 
 #: The list of files skatetrace wrote into an output folder (see :class:`OutputFolder`).
 MANIFEST = ".skatetrace-manifest.json"
@@ -98,7 +98,18 @@ def check_output_folder(path: str | Path, *, label: str = "--out", subfolders: t
     SkatetraceError
         ``path`` is a file, lies under a file, or cannot be created or written in. Nothing is changed then.
     """
-    return _check_folder(Path(path), label, subfolders)[0]
+    return _check_folder(output_path(path, label, "folder"), label, subfolders)[0]
+
+
+def output_path(path: str | Path, label: str, what: str = "file") -> Path:
+    """``path`` as a Path; an empty or blank name (which a Path would read as the current folder) is refused.
+
+    ``what`` ("file" or "folder") and ``label`` (the command-line option) word the message.
+    """
+    if isinstance(path, str) and not path.strip():
+        hint = " (. for the current folder)" if what == "folder" else ""
+        raise SkatetraceError(f"{label}: {path!r} names no {what}; give its name{hint}")
+    return Path(path)
 
 
 def _check_folder(path: Path, label: str, subfolders: tuple[str, ...]) -> tuple[list[Path], int]:
@@ -143,7 +154,7 @@ def check_output_file(path: str | Path, *, label: str = "-o", suffixes: tuple[st
         A suffix not accepted (the message lists every accepted one), a folder in place of the file, or a
         folder that is missing, a file, or not writable.
     """
-    path = Path(path)
+    path = output_path(path, label, "file")
     if suffixes and path.suffix.lower() not in suffixes:
         accepted = ", ".join(suffixes[:-1]) + (" or " if len(suffixes) > 1 else "") + suffixes[-1]
         raise SkatetraceError(f"{label}: cannot write {str(path)!r}: the file name must end in {accepted} "
@@ -250,7 +261,7 @@ class OutputFolder:
 
     def __init__(self, path: str | Path, command: str, *, label: str = "--out",
                  subfolders: tuple[str, ...] = ()) -> None:
-        self.path = Path(path)
+        self.path = output_path(path, label, "folder")
         self.command = command
         self.created, self._started = _check_folder(self.path, label, subfolders)
         self._abs = Path(os.path.abspath(self.path))

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import threading
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -41,6 +42,19 @@ def available_workers() -> int:
 
 def _can_fork() -> bool:
     return "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+
+
+def _quiet_on_interrupt() -> None:
+    """In a worker: Ctrl-C (which a terminal sends to every process of the run) ends it at once and
+    quietly; the parent reports the interrupt."""
+    signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel the programs not started and end the workers (an interrupt reached the parent only, say)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        process.terminate()
 
 
 def _solve(job: tuple) -> ProgramSolution:
@@ -68,13 +82,18 @@ def solve_programs(jobs: list[tuple], workers: int | None = None) -> list[Progra
     results: list[ProgramSolution | None] = [None] * len(jobs)
     if count > 1 and _can_fork():
         try:
-            with ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("fork")) as pool:
+            with ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("fork"),
+                                     initializer=_quiet_on_interrupt) as pool:
                 futures = [pool.submit(_solve, job) for job in jobs]
-                for i, future in enumerate(futures):
-                    try:
-                        results[i] = future.result()
-                    except BrokenProcessPool:
-                        break
+                try:
+                    for i, future in enumerate(futures):
+                        try:
+                            results[i] = future.result()
+                        except BrokenProcessPool:
+                            break
+                except KeyboardInterrupt:  # Ctrl-C: the workers stop at once and the interrupt goes on
+                    _stop(pool)
+                    raise
         except BrokenProcessPool:
             pass
     return [r if r is not None else _solve(job) for r, job in zip(results, jobs)]
