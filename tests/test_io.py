@@ -262,3 +262,44 @@ def test_adopt_adds_a_later_file_to_the_runs_manifest(tmp_path):
     assert adopt(out / "viewer.html")
     assert "viewer.html" in strict_loads((out / MANIFEST).read_text())["files"]
     assert not adopt(tmp_path / "loose.html")
+
+
+# --- issue 19: one run at a time, and a folder a run did not finish is not read as one run's ---------------
+
+def test_a_second_run_into_a_folder_being_written_is_refused(tmp_path, capsys):
+    from skatetrace.cli import main
+
+    out = tmp_path / "out"
+    first = OutputFolder(out, "trace")
+    with pytest.raises(SkatetraceError, match="another skatetrace run is writing into"):
+        OutputFolder(out, "trace")
+    assert main(["trace", "circle", "--out", str(out), "--no-plots", "--no-viewer"]) == 2
+    assert "another skatetrace run is writing into" in capsys.readouterr().err
+    first.finish()
+    OutputFolder(out, "trace").finish()  # free again
+
+
+def test_a_folder_whose_run_did_not_finish_is_refused_by_its_readers(tmp_path, capsys):
+    from skatetrace.cli import main
+    from skatetrace.outputs.folder import check_finished
+
+    out = tmp_path / "out"
+    assert main(["trace", "circle", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    check_finished(out)  # a finished run passes
+    assert strict_loads((out / MANIFEST).read_text())["complete"] is True
+    run = OutputFolder(out, "trace")
+    with run:  # a second run writes one file, then dies before finish()
+        atomic_write(out / "result.json", (out / "result.json").read_text())
+    assert strict_loads((out / MANIFEST).read_text())["complete"] is False
+    del run
+    with pytest.raises(SkatetraceError, match="did not finish writing"):
+        check_finished(out / "result.json")
+    capsys.readouterr()
+    for argv in (["view", str(out)], ["animate", str(out), "-o", str(tmp_path / "a.gif")],
+                 ["robustness", str(out), "--trials", "2"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "did not finish writing" in err and "skatetrace trace" in err, (argv, err)
+    assert main(["trace", "circle", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    check_finished(out)  # the next finished run makes it one run's again
+    assert main(["view", str(out)]) == 0

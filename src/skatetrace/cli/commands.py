@@ -482,11 +482,12 @@ def _still_time(args, pb) -> float:
 
 def _animate(args) -> int:
     from ..outputs.animation import SUFFIXES, STILL_SUFFIXES, AnimationOptions, animate, save_still
-    from ..outputs.folder import check_output_file
+    from ..outputs.folder import check_finished, check_output_file
     from ..outputs.playback import load_playback
 
     t0 = time.perf_counter()
     check_output_file(args.output, label="-o", suffixes=SUFFIXES + STILL_SUFFIXES, create_parent=False)
+    check_finished(args.source)
     out = Path(args.output)
     if args.time is not None and out.suffix.lower() not in STILL_SUFFIXES:
         raise SkatetraceError(f"--time picks the one frame of a still: use it with -o NAME.png (a "
@@ -507,11 +508,12 @@ def _animate(args) -> int:
 
 
 def _view(args) -> int:
-    from ..outputs.folder import adopt, check_output_file, output_path
+    from ..outputs.folder import adopt, check_finished, check_output_file, output_path
     from ..outputs.playback import load_playback
     from ..outputs.viewer import write_viewer
 
     t0 = time.perf_counter()
+    check_finished(args.source)
     src = Path(args.source)
     if args.output is not None:
         output_path(args.output, "-o")  # an empty name is refused, not read as the current folder

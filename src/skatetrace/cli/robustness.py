@@ -135,11 +135,12 @@ def _write(report, traced, laws, gains, plots: bool) -> list[str]:
 def run(args) -> int:
     """Run ``skatetrace robustness``; returns the exit code."""
     from ..feedback.robustness import MAX_STEPS, lqr_laws, robustness
-    from ..outputs.folder import check_output_file
+    from ..outputs.folder import check_finished, check_output_file
     from ..outputs.traced import load_traced
     from .commands import _progress_bar  # already loaded: this command runs from it
 
     t0 = time.perf_counter()
+    check_finished(args.source)
     traced = load_traced(args.source)
     perturbation = _perturbation(args, traced)
     if not (math.isfinite(args.rate_weight) and args.rate_weight > 0):

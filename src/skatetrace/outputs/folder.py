@@ -18,7 +18,8 @@ from typing import Any
 from ..errors import SkatetraceError
 from .files import atomic_write, dumps_json, record_writes
 
-__all__ = ["MANIFEST", "check_output_folder", "check_output_file", "output_path", "OutputFolder", "adopt"]
+__all__ = ["MANIFEST", "check_finished", "check_output_folder", "check_output_file", "output_path", "OutputFolder",
+           "adopt"]
 
 #: The list of files skatetrace wrote into an output folder (see :class:`OutputFolder`).
 MANIFEST = ".skatetrace-manifest.json"
@@ -191,15 +192,55 @@ def _read_manifest(folder: Path) -> dict[str, Any] | None:
         return None
     if not isinstance(data, dict) or data.get("schema") != _MANIFEST_SCHEMA or not isinstance(data.get("files"), list):
         return None
-    return {"command": data.get("command"), "files": [f for f in data["files"] if _safe_relative(f)]}
+    return {"command": data.get("command"), "files": [f for f in data["files"] if _safe_relative(f)],
+            "complete": data.get("complete", True) is not False}
 
 
-def _write_manifest(folder: Path, command: str | None, files) -> None:
+def _write_manifest(folder: Path, command: str | None, files, complete: bool = True) -> None:
     atomic_write(folder / MANIFEST, dumps_json({
         "schema": _MANIFEST_SCHEMA, "command": command,
         "note": "files skatetrace wrote here; the next run into this folder removes those it does not write again",
         "files": sorted(set(files)),
+        # False from a run's first file to its end: a run killed on the way leaves it so, and
+        # the commands that read the folder refuse its mix of two runs' files
+        "complete": complete,
     }) + "\n")
+
+
+def check_finished(folder: str | Path) -> None:
+    """Refuse a folder whose last run did not finish writing (its manifest says ``"complete": false``).
+
+    Such a folder may hold files of two runs side by side (a new ``result.json`` beside an older
+    ``controls.csv``). A folder without a manifest, or written before the flag existed, passes.
+
+    Raises
+    ------
+    SkatetraceError
+    """
+    folder = Path(folder)
+    folder = folder.parent if folder.suffix == ".json" else folder
+    manifest = _read_manifest(folder)
+    if manifest is not None and not manifest["complete"]:
+        raise SkatetraceError(f"{folder} holds the files of a run that did not finish writing (interrupted or failed: "
+                              f"its {MANIFEST} says so), perhaps beside an earlier run's: run "
+                              f"'skatetrace {manifest['command'] or 'trace'}' into it again, or give another folder")
+
+
+def _lock(path: Path, label: str):
+    """An exclusive lock on the folder ``path`` (its own descriptor, so no file is added), or an error
+    if another run holds it. Released when the descriptor is closed, or when the process ends."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no lock
+        return None
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise SkatetraceError(f"{label}: another skatetrace run is writing into {path}; wait for it to finish, or "
+                              "give another folder") from None
+    return fd
 
 
 # Folders written before manifests existed: recognised by their JSON's schema, with the names written then.
@@ -243,6 +284,11 @@ class OutputFolder:
     known); :meth:`finish` then removes the owned files this run did not write and leaves the
     manifest listing exactly this run's files. Other files (a user's notes) are never touched.
 
+    From its first file to :meth:`finish` the manifest says ``"complete": false``: a run killed on
+    the way leaves a folder that :func:`check_finished` (and so ``view``, ``animate`` and
+    ``robustness``) refuses. The folder is locked from the check to :meth:`finish` or
+    :meth:`discard` (or the process's end): a second run into it is refused at once.
+
     Parameters
     ----------
     path : str or Path
@@ -264,6 +310,11 @@ class OutputFolder:
         self.path = output_path(path, label, "folder")
         self.command = command
         self.created, self._started = _check_folder(self.path, label, subfolders)
+        try:
+            self._lock = _lock(self.path, label)
+        except SkatetraceError:
+            _remove_created(self.created)
+            raise
         self._abs = Path(os.path.abspath(self.path))
         manifest = _read_manifest(self.path)
         self.before: tuple[str, ...] = tuple(manifest["files"] if manifest is not None else _legacy_files(self.path))
@@ -283,9 +334,10 @@ class OutputFolder:
         rel = _relative(self._abs, path)
         if rel is None or rel == MANIFEST or rel in self.written:
             return
+        first = not self.written
         self.written.append(rel)
-        if rel not in self.before:
-            _write_manifest(self.path, self.command, [*self.before, *self.written])
+        if first or rel not in self.before:
+            _write_manifest(self.path, self.command, [*self.before, *self.written], complete=False)
 
     def finish(self) -> list[str]:
         """Remove the owned files this run did not write; list this run's files in the manifest.
@@ -293,6 +345,7 @@ class OutputFolder:
         Returns the names removed (relative to the folder). A run that wrote nothing changes nothing.
         """
         if not self.written:
+            self._unlock()
             return []
         removed = []
         for rel in sorted(set(self.before) - set(self.written)):
@@ -319,11 +372,21 @@ class OutputFolder:
                 except OSError:
                     break
         _write_manifest(self.path, self.command, self.written)
+        self._unlock()
         return removed
 
     def discard(self) -> None:
         """Remove the folders the check created, if still empty (a run that failed before writing)."""
+        self._unlock()
         _remove_created(self.created)
+
+    def __del__(self) -> None:  # a folder object let go of without finish() (a test, a caller's error)
+        self._unlock()
+
+    def _unlock(self) -> None:
+        if getattr(self, "_lock", None) is not None:
+            os.close(self._lock)
+            self._lock = None
 
 
 def adopt(path: str | Path) -> bool:
@@ -337,5 +400,5 @@ def adopt(path: str | Path) -> bool:
     if manifest is None:
         return False
     if path.name not in manifest["files"]:
-        _write_manifest(path.parent, manifest["command"], [*manifest["files"], path.name])
+        _write_manifest(path.parent, manifest["command"], [*manifest["files"], path.name], manifest["complete"])
     return True
