@@ -327,7 +327,28 @@ def test_a_program_too_large_to_build_is_refused_as_data(monkeypatch):
     trace = plan_figure(figure, figure.params, st.TraceOptions(reach=0.5, workers=1))
     (sec,) = trace.sections
     assert not sec.success and sec.status is st.TraceStatus.NOT_PLANNED
-    assert "more than the 400,000 allowed" in sec.message and "--reach none" in sec.message
+    assert f"more than the {collocation.MAX_UNKNOWNS:,} allowed" in sec.message and "--reach none" in sec.message
+
+
+def test_a_solver_that_stops_with_an_error_is_a_failed_program_not_a_crash(monkeypatch):
+    """Issue 19: IPOPT out of memory (std::bad_alloc, raised by CasADi as RuntimeError) on a
+    2,000-point zigzag drawing was a traceback after 12 s; it is a failed program, and the default
+    reach then falls back to the launch-glide-stop manoeuvres."""
+    from skatetrace.planning import collocation, nlp
+
+    def bad_alloc(self, options):
+        raise RuntimeError("Error in Function::call for 'plan' [IpoptInterface] at .../function.cpp:514:\n"
+                           "std::bad_alloc")
+
+    monkeypatch.setattr(nlp.SparseProgram, "solve", bad_alloc)
+    figure = figure_from_dict({"curves": [{"pieces": [{"type": "arc", "radius": 1, "sweep_deg": 90}]}]})
+    trace = plan_figure(figure, figure.params, st.TraceOptions(reach=0.5, workers=1))
+    (sec,) = trace.sections
+    assert not sec.success and sec.message
+    from skatetrace.planning.planner import _program_options, curve_specs
+    specs, _ = curve_specs(figure.curves[0])
+    sol = collocation.solve_program(specs, _program_options(st.SleighParams(), st.TraceOptions(reach=0.5)))
+    assert not sol.success and sol.status == "solver_error" and sol.message == "the solver stopped: out of memory"
 
 
 def test_the_size_check_passes_every_school_figure():

@@ -36,10 +36,10 @@ _DEGREE = 3
 _STALLED = ("Error_In_Step_Computation", "Maximum_Iterations_Exceeded", "Restoration_Failed",
             "Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Level")
 _FEASIBLE = 1e-8
-#: The most unknowns a program may have. The school figures' largest has about 10,000 and a drawing's
-#: some tens of thousands; each takes CasADi and IPOPT about a kilobyte, so a section lasting ten
-#: thousand times a school figure's (a straight line a thousand kilometres long) would take gigabytes.
-MAX_UNKNOWNS = 400_000
+#: The most unknowns a program may have. The school figures' largest has about 10,000, the corpus
+#: drawings' up to 40,000; measured, CasADi and IPOPT take about 40 kB each (a single section of
+#: 24,000 unknowns: 0.9 GB), so 60,000 stay within about 2.5 GB.
+MAX_UNKNOWNS = 60_000
 
 
 def _radau() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -276,8 +276,18 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     ``(0, b_g)``, ``b_g`` half the reach on the side away from the singular points.
     ``meshes`` (optional) gives per section and piece the mesh nodes (any increasing times; only
     their proportions count), e.g. a refined :attr:`ProgramSolution.meshes`; ``guess`` must then
-    be given on the same nodes. Never raises for a program IPOPT cannot solve: the result says so.
+    be given on the same nodes. Never raises for a program IPOPT cannot solve: the result says so,
+    also where CasADi or IPOPT stop with an error (out of memory, say: ``status="solver_error"``).
     """
+    try:
+        return _solve_program(sections, options, guess, meshes)
+    except (RuntimeError, MemoryError) as exc:  # CasADi raises RuntimeError for its own and IPOPT's errors
+        text = " ".join(str(exc).split())
+        reason = "out of memory" if "bad_alloc" in text or isinstance(exc, MemoryError) else text[-200:]
+        return ProgramSolution(success=False, status="solver_error", message=f"the solver stopped: {reason}")
+
+
+def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, meshes) -> ProgramSolution:
     o = options
     fn = sleigh_functions(o.M, o.m, o.I)
     xi2f, ratesf = fn["xi2"], fn["rates"]
