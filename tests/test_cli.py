@@ -263,6 +263,26 @@ def test_an_empty_output_name_is_refused_not_read_as_the_current_folder(tmp_path
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command, name", [(["trace", "circle"], "result.json"), (["trace", "circle"], "speed.png"),
+                                           (["fit", str(EXAMPLES / "points-eight.csv")], "fit.png")])
+def test_a_folder_in_place_of_an_output_file_exits_2_before_any_work(tmp_path, capsys, monkeypatch, command, name):
+    """Issue 19: a folder holding a directory called result.json failed with a raw 'Is a directory' after the work."""
+    _no_work(monkeypatch)
+    (tmp_path / "out" / name).mkdir(parents=True)
+    assert main([*command, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"{name} is a folder, and '{command[0]}' writes a file of that name there" in err, err
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [name]
+
+
+def test_an_output_name_too_long_for_the_file_system_exits_2_before_any_work(tmp_path, capsys, monkeypatch):
+    _no_work(monkeypatch)
+    assert main(["trace", "circle", "--out", str(tmp_path / ("x" * 300))]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("skatetrace: error: --out: cannot use ")
+    assert "characters) as a folder" in err and "give a shorter name" in err and len(err) < 300
+
+
 def test_out_without_write_permission_exits_2_before_any_work(tmp_path, capsys, monkeypatch):
     import tempfile
 

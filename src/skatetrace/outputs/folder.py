@@ -58,9 +58,16 @@ def _remove_created(created: list[Path]) -> None:
 
 def _make_folder(path: Path, label: str) -> list[Path]:
     """Create ``path`` and missing parents (returned, outermost first); clear errors if it cannot be."""
-    if path.is_dir():
-        return []
-    if os.path.lexists(path):
+    try:
+        if path.is_dir():
+            return []
+        exists = os.path.lexists(path)
+    except OSError as exc:  # a name too long for the file system, say
+        text = str(path)
+        shown = text if len(text) <= 80 else f"{text[:60]}... ({len(text)} characters)"
+        raise SkatetraceError(f"{label}: cannot use {shown} as a folder ({exc.strerror or exc}); give a shorter "
+                              "name") from None
+    if exists:
         raise SkatetraceError(f"{label}: {path} is a file, not a folder; give the name of a folder (it is "
                               "created if missing)")
     anchor = _nearest_existing(path.parent)
@@ -246,6 +253,9 @@ def _lock(path: Path, label: str):
 # Folders written before manifests existed: recognised by their JSON's schema, with the names written then.
 _TRACE_FILES = ("result.json", "controls.csv", "report.json", "fit.json", "fit.png", "figure.png", "controls.png",
                 "speed.png", "mass_path.png", "energies.png", "viewer.html")
+#: The files each command writes into its folder (checked before any work: none may be a folder).
+_COMMAND_FILES = {"trace": _TRACE_FILES, "fit": ("fit.json", "fit.png"), "tradeoff": ("tradeoff.json", "tradeoff.png"),
+                  "reproduce": ("reproduction.json", "report.md", "report.html")}
 _LEGACY = (("result.json", "skatetrace.result/1", _TRACE_FILES),
            ("fit.json", "skatetrace.fit/1", ("fit.json", "fit.png")),
            ("reproduction.json", "skatetrace.reproduction/1", ("reproduction.json", "report.md", "report.html")))
@@ -311,6 +321,10 @@ class OutputFolder:
         self.command = command
         self.created, self._started = _check_folder(self.path, label, subfolders)
         try:
+            for name in _COMMAND_FILES.get(command, ()):
+                if (self.path / name).is_dir():
+                    raise SkatetraceError(f"{label}: {self.path / name} is a folder, and '{command}' writes a file of "
+                                          "that name there: move it, or give another folder")
             self._lock = _lock(self.path, label)
         except SkatetraceError:
             _remove_created(self.created)
