@@ -188,6 +188,57 @@ def test_an_external_entity_is_refused(tmp_path):
         read_svg('<!DOCTYPE svg [<!ENTITY x SYSTEM "file:///etc/passwd">]><svg><title>&x;</title></svg>')
 
 
+ILLUSTRATOR = ('<?xml version="1.0" encoding="utf-8"?>\n<!-- Generator: Adobe Illustrator 24.0.0, SVG Export Plug-In -->\n'
+               '<!DOCTYPE svg PUBLIC "-//W3C//DTD SVG 1.1//EN" "http://www.w3.org/Graphics/SVG/1.1/DTD/svg11.dtd" [\n'
+               '\t<!ENTITY ns_extend "http://ns.adobe.com/Extensibility/1.0/">\n'
+               '\t<!ENTITY ns_ai "http://ns.adobe.com/AdobeIllustrator/10.0/">\n'
+               '\t<!-- the namespaces, as Illustrator declares them -->\n'
+               '\t<!ENTITY ns_svg "http://www.w3.org/2000/svg">\n'
+               "\t<!ENTITY ns_xlink 'http://www.w3.org/1999/xlink'>\n"
+               ']>\n<svg version="1.1" xmlns:x="&ns_extend;" xmlns:i="&ns_ai;" xmlns="&ns_svg;" xmlns:xlink="&ns_xlink;" '
+               'viewBox="0 0 20 10"><path fill="none" stroke="#000" d="M 0 0 L 10 0 L 20 10"/></svg>\n')
+
+
+def test_an_illustrator_doctype_with_namespace_entities_is_read(tmp_path):
+    """Issue 17: Illustrator's exports declare their namespaces as entities, which the safe parser refuses."""
+    file = tmp_path / "ai.svg"
+    file.write_text(ILLUSTRATOR, encoding="utf-8")
+    for source in (file, ILLUSTRATOR):
+        d = read_svg(source)
+        assert len(d.paths) == 1 and np.allclose(d.paths[0].pieces[-1].end, [20.0, -10.0])
+        assert any("inlined the XML entities ns_ai, ns_extend, ns_svg, ns_xlink" in n for n in d.notes)
+
+
+@pytest.mark.parametrize("doctype, why", [
+    ('<!ENTITY a "x"><!ENTITY b "&a;&a;">', "nests"),
+    ('<!ENTITY x SYSTEM "file:///etc/passwd">', "external"),
+    ('<!ENTITY % p "x">', "a parameter entity"),
+    ('<!ENTITY a "x"><!ELEMENT svg ANY>', "another declaration"),
+    ('<!ENTITY a "' + "x" * 2000 + '">', "too long a value"),
+    ("".join(f'<!ENTITY e{k} "x">' for k in range(65)), "too many"),
+])
+def test_only_plain_text_entities_are_inlined(doctype, why):
+    from skatetrace.drawings.svg_entities import inline_entities
+
+    doc = f'<!DOCTYPE svg [{doctype}]><svg xmlns="http://www.w3.org/2000/svg"><title>&a;</title></svg>'
+    assert inline_entities(doc) == (doc, []), why
+    assert inline_entities(doc.encode()) == (doc.encode(), []), why
+    with pytest.raises(DrawingError, match="refused"):
+        read_svg(doc)
+
+
+def test_inlining_is_bounded_in_the_size_it_adds():
+    from skatetrace.drawings.svg_entities import MAX_GROWTH, inline_entities
+
+    value = "y" * 1000
+    refs = "&a;" * (MAX_GROWTH // 1000 + 1)
+    doc = f'<!DOCTYPE svg [<!ENTITY a "{value}">]><svg><title>{refs}</title></svg>'
+    assert inline_entities(doc) == (doc, [])  # more than MAX_GROWTH characters would be added
+    small = f'<!DOCTYPE svg [<!ENTITY a "{value}">]><svg><title>&a;&a;</title></svg>'
+    out, names = inline_entities(small)
+    assert names == ["a"] and out == f"<svg><title>{value}{value}</title></svg>"
+
+
 def test_a_plain_doctype_is_fine_and_so_is_a_file_without_the_namespace(tmp_path):
     doctype = ('<?xml version="1.0" standalone="no"?>\n<!DOCTYPE svg PUBLIC "-//W3C//DTD SVG 1.1//EN" '
                '"http://www.w3.org/Graphics/SVG/1.1/DTD/svg11.dtd">\n')

@@ -4,27 +4,26 @@ The one module that knows SVG: it alone imports the SVG parsers (defusedxml and 
 
 Reading
 -------
-The document is parsed first with defusedxml, which refuses DTDs that declare entities (an "XML
-bomb" expands a few of them into gigabytes) and external references (``<!ENTITY x SYSTEM
-"file:///etc/passwd">``). The same bytes then go to svgelements' ``SVG.parse``, which expands
-``<use>`` (``href`` or ``xlink:href``, of shapes, groups, symbols and other ``<use>``), applies
-``<style>`` sheets (selectors ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``) and ``style``
-attributes with inheritance, converts lengths in units (``mm``, ``cm``, ``in``, ``pt``, ``pc``,
-``%``) to user units at 96 per inch, and composes every transform, nested ``<svg>`` viewports
-included. Where svgelements departs from SVG, :mod:`.svg_style` and this module correct it: a
-``<symbol>`` (or a ``<marker>``, ``<mask>``) is drawn only through a ``<use>``, a ``<use>`` of a
-``<symbol>`` with a ``viewBox`` maps it onto the ``<use>``'s width and height, a ``<switch>`` draws
-one child, a nested ``<svg>`` without ``viewBox`` is moved to its ``x``, ``y``, and visibility is
-read at all. ``<use>`` cycles and expansions beyond ``MAX_ELEMENTS`` elements are refused.
+The document is parsed first with defusedxml, which refuses DTDs that declare entities (an "XML bomb"
+expands a few into gigabytes; plain text ones, as Illustrator writes, are inlined first by
+:mod:`.svg_entities`) and external references (``<!ENTITY x SYSTEM "file:///etc/passwd">``). The same
+bytes then go to svgelements' ``SVG.parse``, which expands ``<use>`` (``href`` or ``xlink:href``, of
+shapes, groups, symbols and other ``<use>``), applies ``<style>`` sheets (selectors ``*``, ``tag``,
+``#id``, ``.class``, ``tag.class``) and ``style`` attributes with inheritance, converts lengths in
+units (``mm``, ``cm``, ``in``, ``pt``, ``pc``, ``%``) to user units at 96 per inch, and composes
+every transform, nested ``<svg>`` viewports included. Where svgelements departs from SVG,
+:mod:`.svg_style` and this module correct it: a ``<symbol>`` (or a ``<marker>``, ``<mask>``) is drawn
+only through a ``<use>``, a ``<use>`` of a ``<symbol>`` with a ``viewBox`` maps it onto the
+``<use>``'s width and height, a ``<switch>`` draws one child, a nested ``<svg>`` without ``viewBox`` is
+moved to its ``x``, ``y``, visibility is read. ``<use>`` cycles and expansions past ``MAX_ELEMENTS`` are refused.
 
 Coordinates
 -----------
 SVG user units (the root's ``viewBox`` coordinates, after every group, ``<use>``, nested ``<svg>``
-and element ``transform``) become model units one to one, with the y axis flipped: SVG's y points
-down the page, ours points up, so a drawing keeps its handedness (a loop drawn clockwise on screen
-is clockwise here too). The page size (``width="210mm"``) is paper, not ice: it is in ``notes``
-and otherwise ignored (the root's viewport transform is taken off again). Scale a drawing to the
-ice with :meth:`Drawing.scaled_to` and a size from :func:`~skatetrace.drawings.lengths.parse_length`.
+and element ``transform``) become model units one to one, with the y axis flipped (SVG's points
+down the page): a loop drawn clockwise on screen is clockwise here too. The page size
+(``width="210mm"``) is paper, not ice: it is in ``notes`` and otherwise ignored. Scale a drawing to
+the ice with :meth:`Drawing.scaled_to` and a size from :func:`~skatetrace.drawings.lengths.parse_length`.
 
 Exactness
 ---------
@@ -38,12 +37,11 @@ perpendicular, which a rotated ellipse under a non-uniform scale does not).
 
 Degenerate input
 ----------------
-Exactly zero-length segments are dropped (with a note); tiny ones are kept. An arc with a zero
-radius is a straight line (as SVG says; a note says so). A Bézier with a zero-length handle is kept
-(its derivative vanishes at that end; a note says so). An element made only of zero-length segments
-or of zero size, non-finite or huge (beyond ``MAX_COORD``) coordinates, a singular transform,
-malformed XML, path data or transforms, refused XML and missing files raise :class:`DrawingError`
-with the file, element or line and what would be accepted.
+Exactly zero-length segments are dropped, a zero-radius arc is a line (as SVG says), a Bézier with a
+zero-length handle is kept (its derivative vanishes there), each with a note. An element of only
+zero-length segments or of zero size, non-finite or huge (beyond ``MAX_COORD``) coordinates, a
+singular transform, malformed XML, path data or transforms, refused XML and missing files raise
+:class:`DrawingError` with the file, element or line and what would be accepted.
 """
 
 from __future__ import annotations
@@ -62,6 +60,7 @@ from defusedxml.ElementTree import fromstring as _safe_fromstring
 from .curves import BezierPiece, Drawing, EllipticArcPiece, LinePiece, Path, Piece
 from .files import file_stem, read_bytes, shorten
 from .lengths import CLOSE_TOL, MAX_COORD, extent
+from .svg_entities import inline_entities
 from .svg_style import (MAX_ELEMENTS, SHAPE_TAGS, Placed, Visibility, check_transforms, expand, local_tag,
                         styled_names, visibility)
 from ..errors import DrawingError
@@ -155,8 +154,9 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     else:
         raise DrawingError(f"read_svg expects a file name or SVG text, got {type(source).__name__}")
 
+    data, inlined = inline_entities(data)
     root = _parse_xml(data, origin)
-    notes = list(_page_notes(root))
+    notes = [f"inlined the XML entities {', '.join(inlined)} of its DOCTYPE"] * bool(inlined) + list(_page_notes(root))
     check_transforms(root, origin)
     placed = expand(root, origin)
     document = _parse_svg(data, root, origin, notes)
