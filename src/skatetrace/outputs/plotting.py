@@ -32,11 +32,10 @@ _UNITS = {
     "model": {"length": "model length", "time": "model time", "speed": "model length/time",
               "acceleration": "model length/time²", "energy": "model energy", "curvature": "1/model length"},
 }
-#: Legend outside the axes, top right: it never covers data.
-#: Rows of the replay drawn in each plot of :func:`save_all` at most (a long figure's replay holds a
-#: quarter of a million; an image 1100 pixels wide shows a few thousand).
+#: Rows of the replay drawn in each plot of :func:`save_all` at most (a long figure's replay holds up
+#: to 200,000; an image 1100 pixels wide shows a few thousand).
 PLOT_ROWS = 20_000
-
+#: Legend outside the axes, top right: it never covers data.
 _OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0, "fontsize": 8}
 
 
