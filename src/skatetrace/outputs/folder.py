@@ -9,6 +9,7 @@ Files skatetrace did not write are never touched.
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import tempfile
@@ -240,13 +241,18 @@ def _lock(path: Path, label: str):
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX: no lock
         return None
-    fd = os.open(path, os.O_RDONLY)
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:  # a folder that cannot be opened for reading (but was written in): no lock
+        return None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
+    except OSError as exc:
         os.close(fd)
-        raise SkatetraceError(f"{label}: another skatetrace run is writing into {path}; wait for it to finish, or "
-                              "give another folder") from None
+        if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+            raise SkatetraceError(f"{label}: another skatetrace run is writing into {path}; wait for it to finish, "
+                                  "or give another folder") from None
+        return None  # a file system without locks (some network ones): no lock, as before
     return fd
 
 
