@@ -142,6 +142,21 @@ def test_the_longest_video_allowed_is_accepted():
     assert AnimationOptions(fps=25, duration=animation.MAX_FRAMES / 25).duration == animation.MAX_FRAMES / 25
 
 
+def test_the_frame_bound_holds_at_the_default_length_too(playback):
+    """Without --duration the video lasts the figure's own time (8 to 30 s): an fps that the 8 s floor
+    allows may still make too many frames for a longer figure, which frames() refuses before any is drawn."""
+    from types import SimpleNamespace
+
+    fps = animation.MAX_FRAMES / animation.MIN_SECONDS  # allowed up front: exactly the bound at 8 s
+    opts = AnimationOptions(fps=fps)
+    assert playback.duration < animation.MIN_SECONDS and opts.frames(playback) == animation.MAX_FRAMES
+    with pytest.raises(ValueError, match=r"a video of 20 s at 11250 fps would have 2\.25e\+05 frames, more than the "
+                                         r"90,000 allowed"):
+        opts.frames(SimpleNamespace(duration=20.0))  # a figure of 20 s plays in 20 s
+    # a short explicit video at a high rate is within the bound: not refused
+    assert AnimationOptions(fps=1e6, duration=0.01).frames(playback) == 10_000
+
+
 def test_bad_paths_and_folders_are_clear_errors(playback, tmp_path):
     with pytest.raises(ValueError, match=r"must end in \.gif or \.mp4 \(got '\.avi'\)"):
         animate(playback, tmp_path / "x.avi", SMALL)

@@ -126,11 +126,10 @@ class AnimationOptions:
         if self.duration is not None and round(self.fps * self.duration) < 1:
             raise ValueError(f"a video of {self.duration:g} s at {self.fps:g} fps has no frames: "
                              "give a longer duration or a higher fps")
-        if self.duration is not None and self.fps * self.duration > MAX_FRAMES:
-            raise ValueError(f"a video of {self.duration:g} s at {self.fps:g} fps would have "
-                             f"{self.fps * self.duration:.3g} frames, more than the {MAX_FRAMES:,} allowed: give a "
-                             "shorter duration or a lower fps")
-        if self.fps * MIN_SECONDS > MAX_FRAMES:
+        # refused up front where the count is known without the figure (frames() checks it again with it)
+        if self.duration is not None:
+            _check_frames(self.fps, self.duration)
+        elif self.fps * MIN_SECONDS > MAX_FRAMES:  # the default length is at least MIN_SECONDS
             raise ValueError(f"{self.fps:g} fps is more than a video of at least {MIN_SECONDS:g} s can have within "
                              f"{MAX_FRAMES:,} frames: give a lower fps")
 
@@ -141,8 +140,20 @@ class AnimationOptions:
         return float(np.clip(playback.duration, MIN_SECONDS, MAX_SECONDS))
 
     def frames(self, playback: Playback) -> int:
-        """Number of frames of the video of ``playback``: ``round(fps * seconds)``, at least one."""
-        return max(1, round(self.fps * self.seconds(playback)))
+        """Number of frames of the video of ``playback``: ``round(fps * seconds)``, at least one.
+
+        Raises ValueError beyond :data:`MAX_FRAMES`.
+        """
+        seconds = self.seconds(playback)
+        _check_frames(self.fps, seconds)
+        return max(1, round(self.fps * seconds))
+
+
+def _check_frames(fps: float, seconds: float) -> None:
+    """Refuse a video of more than :data:`MAX_FRAMES` frames, naming the count."""
+    if fps * seconds > MAX_FRAMES:
+        raise ValueError(f"a video of {seconds:g} s at {fps:g} fps would have {fps * seconds:.3g} frames, more than "
+                         f"the {MAX_FRAMES:,} allowed: give a shorter duration or a lower fps")
 
 
 @dataclass(frozen=True, slots=True)
