@@ -289,14 +289,14 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
 
 def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, meshes) -> ProgramSolution:
     o = options
+    layout, n = _layout(sections, o, meshes)
+    refused = _too_large(layout, n, o)  # before anything symbolic is built
+    if refused is not None:
+        return ProgramSolution(success=False, status="too_large", message=refused)
     fn = sleigh_functions(o.M, o.m, o.I)
     xi2f, ratesf = fn["xi2"], fn["rates"]
     tau, C, B = _radau()
     interval = _interval_function(fn, C, B, o)
-    layout, n = _layout(sections, o, meshes)
-    refused = _too_large(layout, n, o)
-    if refused is not None:
-        return ProgramSolution(success=False, status="too_large", message=refused)
     prog = SparseProgram(n)
     reach2 = o.reach * o.reach
     prev_end = None  # (x, cf, s0) at the end of the previous section
