@@ -256,15 +256,18 @@ def _lock(path: Path, label: str):
     return fd
 
 
-# Folders written before manifests existed: recognised by their JSON's schema, with the names written then.
-_TRACE_FILES = ("result.json", "controls.csv", "report.json", "fit.json", "fit.png", "figure.png", "controls.png",
-                "speed.png", "mass_path.png", "energies.png", "viewer.html")
 #: The files each command writes into its folder (checked before any work: none may be a folder).
-_COMMAND_FILES = {"trace": _TRACE_FILES, "fit": ("fit.json", "fit.png"), "tradeoff": ("tradeoff.json", "tradeoff.png"),
-                  "reproduce": ("reproduction.json", "report.md", "report.html")}
-_LEGACY = (("result.json", "skatetrace.result/1", _TRACE_FILES),
-           ("fit.json", "skatetrace.fit/1", ("fit.json", "fit.png")),
-           ("reproduction.json", "skatetrace.reproduction/1", ("reproduction.json", "report.md", "report.html")))
+_COMMAND_FILES = {
+    "trace": ("result.json", "controls.csv", "report.json", "fit.json", "fit.png", "figure.png", "controls.png",
+              "speed.png", "mass_path.png", "energies.png", "viewer.html"),
+    "fit": ("fit.json", "fit.png"),
+    "tradeoff": ("tradeoff.json", "tradeoff.png"),
+    "reproduce": ("reproduction.json", "report.md", "report.html"),
+}
+# Folders written before manifests existed: recognised by their JSON's schema, with the names written then.
+_LEGACY = (("result.json", "skatetrace.result/1", _COMMAND_FILES["trace"]),
+           ("fit.json", "skatetrace.fit/1", _COMMAND_FILES["fit"]),
+           ("reproduction.json", "skatetrace.reproduction/1", _COMMAND_FILES["reproduce"]))
 
 
 def _legacy_files(folder: Path) -> list[str]:
