@@ -241,6 +241,26 @@ def test_curvature_condition_equals_D_times_xi1_minus_kappa_xi2():
     assert np.all(np.abs(lhs - rhs) <= 1e-13 * scale + 1e-14)
 
 
+def test_rhs_jacobian_is_the_complex_step_derivative_of_rhs():
+    """The exact derivatives of the tracking law's linearisation against complex steps through
+    ``rhs`` itself (no subtraction, so accurate to round-off: an independent check of every entry)."""
+    rng = np.random.default_rng(11)
+    X = random_inputs(rng, 300)
+    theta = rng.uniform(-4.0, 4.0, size=300)
+    v = [X[:, 0], X[:, 1], theta, rng.normal(size=300), rng.normal(size=300), X[:, 2], X[:, 3], X[:, 4], X[:, 5]]
+    J = model.rhs_jacobian(PARAMS, np.array(v[:5]), *v[5:])
+    assert J.shape == (5, 9, 300)
+    h = 1e-30
+    for j in range(9):
+        w = [np.asarray(x, dtype=complex) for x in v]
+        w[j] = w[j] + 1j * h
+        cs = model.rhs(PARAMS, np.array(w[:5]), *w[5:]).imag / h
+        scale = np.max(np.abs(cs), axis=1, keepdims=True) + 1.0
+        assert np.all(np.abs(J[:, j] - cs) <= 1e-12 * scale), f"column {j}"
+    # one point: shapes without the trailing axis
+    assert model.rhs_jacobian(PARAMS, np.array(v[:5])[:, 0], *(x[0] for x in v[5:])).shape == (5, 9)
+
+
 @pytest.mark.parametrize("kappa", [1 / 1.2, -0.5, 2.0, 1e-3])
 def test_singular_point_is_where_both_coefficients_vanish(kappa):
     params = PARAMS

@@ -27,6 +27,7 @@ __all__ = [
     "body_velocities",
     "momenta",
     "rhs",
+    "rhs_jacobian",
     "skate_energy",
     "mass_velocity",
     "mass_energy",
@@ -198,3 +199,54 @@ def singular_point(params: SleighParams, kappa: float) -> tuple[float, float]:
     There neither control rate can hold the curvature, whichever is chosen as free.
     """
     return 0.0, -kappa * params.I / params.M
+
+
+def rhs_jacobian(params: SleighParams, state, a, b, adot, bdot):
+    """Partial derivatives of :func:`rhs`, exact (the quotient rule on :func:`velocities`' fractions).
+
+    Parameters
+    ----------
+    state : array_like, shape (5,) or (5, n)
+    a, b, adot, bdot : float or array_like, shape (n,)
+
+    Returns
+    -------
+    ndarray, shape (5, 9) or (5, 9, n)
+        ``J[i, j]`` is the derivative of row ``i`` of :func:`rhs` with respect to variable ``j`` of
+        ``(p1, p2, theta, x, y, a, b, adot, bdot)``.
+    """
+    M, m, I = params.M, params.m, params.I
+    p1, p2, theta = (np.asarray(v, dtype=float) for v in (state[0], state[1], state[2]))
+    a, b, adot, bdot = (np.asarray(v, dtype=float) for v in (a, b, adot, bdot))
+    shape = np.broadcast_shapes(p1.shape, a.shape, b.shape, adot.shape, bdot.shape)
+    zero = np.zeros(shape)
+    Mm = M + m
+    D = Mm * (I + m * a * a) + M * m * b * b
+    q = p1 - m * a * bdot
+    r = p2 + M * adot
+    xi1 = (Mm * q + m * b * r) / D
+    xi2 = (m * (b * q - (I + m * a * a) * adot) + (I + m * (a * a + b * b)) * p2) / D
+    eta = ((M * m * b * b + I * Mm) * bdot + a * (Mm * p1 + m * b * r)) / D
+    # each velocity's numerator N over D: d(N / D) = (dN - (N / D) dD) / D, by (p1, p2, a, b, adot, bdot)
+    dD = (zero, zero, 2 * Mm * m * a + zero, 2 * M * m * b + zero, zero, zero)
+    dN = {
+        "xi1": (Mm + zero, m * b + zero, -Mm * m * bdot + zero, m * r + zero, M * m * b + zero, -Mm * m * a + zero),
+        "xi2": (m * b + zero, I + m * (a * a + b * b) + zero, m * (2 * a * (p2 - m * adot) - m * b * bdot) + zero,
+                m * (q + 2 * b * p2) + zero, -m * (I + m * a * a) + zero, -m * m * a * b + zero),
+        "eta": (Mm * a + zero, m * a * b + zero, Mm * p1 + m * b * r + zero, m * (2 * M * b * bdot + a * r) + zero,
+                M * m * a * b + zero, M * m * b * b + I * Mm + zero),
+    }
+    value = {"xi1": xi1, "xi2": xi2, "eta": eta}
+    d = {k: [(dn - value[k] * dd) / D for dn, dd in zip(dN[k], dD)] for k in dN}
+    c, s = np.cos(theta) + zero, np.sin(theta) + zero
+    J = np.zeros((5, 9) + shape)
+    cols = (0, 1, 5, 6, 7, 8)
+    for j, col in enumerate(cols):
+        J[0, col] = -m * (d["eta"][j] * xi2 + eta * d["xi2"][j])
+        J[1, col] = m * (d["eta"][j] * xi1 + eta * d["xi1"][j])
+        J[2, col] = d["xi1"][j]
+        J[3, col] = d["xi2"][j] * c
+        J[4, col] = d["xi2"][j] * s
+    J[3, 2] = -xi2 * s
+    J[4, 2] = xi2 * c
+    return J

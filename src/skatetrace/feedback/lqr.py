@@ -54,9 +54,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.model import SleighParams
+from ..dynamics.model import SleighParams, rhs_jacobian
 from ..dynamics.simulate import Controller
-from .reference import Reference, rhs
+from .reference import Reference
 
 __all__ = ["ROBUST_RATE_WEIGHT", "TrackingGains", "TrackingLaw", "default_gains", "design", "robust_gains"]
 
@@ -124,20 +124,16 @@ def robust_gains(size: float, rate_weight: float = ROBUST_RATE_WEIGHT) -> Tracki
 
 
 def _jacobians(p: SleighParams, z: np.ndarray, u: np.ndarray):
-    """``A = df/dz`` (k, 7, 7) and ``B = df/du`` (k, 7, 2) at the columns of ``z`` (7, k), ``u`` (2, k),
-    by central differences (the model is smooth; steps of 1e-6 of each variable's scale)."""
+    """``A = df/dz`` (k, 7, 7) and ``B = df/du`` (k, 7, 2) at the columns of ``z`` (7, k), ``u`` (2, k):
+    the model's exact derivatives (:func:`~skatetrace.dynamics.model.rhs_jacobian`), and ``d(a, b)/dt = u``."""
     k = z.shape[1]
-    A, B = np.empty((k, 7, 7)), np.empty((k, 7, 2))
-    zs = np.maximum(np.max(np.abs(z), axis=1, keepdims=True), 1e-3) * 1e-6
-    us = np.maximum(np.max(np.abs(u), axis=1, keepdims=True), 1e-3) * 1e-6
-    for j in range(7):
-        dz = np.zeros_like(z)
-        dz[j] = zs[j]
-        A[:, :, j] = ((rhs(p, z + dz, *u) - rhs(p, z - dz, *u)) / (2 * zs[j])).T
-    for j in range(2):
-        du = np.zeros_like(u)
-        du[j] = us[j]
-        B[:, :, j] = ((rhs(p, z, *(u + du)) - rhs(p, z, *(u - du))) / (2 * us[j])).T
+    A, B = np.zeros((k, 7, 7)), np.zeros((k, 7, 2))
+    for r0 in range(0, k, _BLOCK // 8):  # blocks small enough for the transposing copy to stay in cache
+        rows = slice(r0, r0 + _BLOCK // 8)
+        J = np.moveaxis(rhs_jacobian(p, z[:5, rows], z[5, rows], z[6, rows], u[0, rows], u[1, rows]), -1, 0)
+        A[rows, :5] = J[:, :, :7]
+        B[rows, :5] = J[:, :, 7:]
+    B[:, 5, 0] = B[:, 6, 1] = 1.0
     return A, B
 
 
@@ -239,6 +235,10 @@ def _reference_at(ref: Reference, tau, n: int):
     return ref.state_at(tau if tau.ndim == 0 else np.broadcast_to(tau, (n,)))
 
 
+#: Rows of the gains computed at once from the Riccati solution (bounds the temporaries).
+_BLOCK = 65_536
+
+
 class _Stop(Exception):
     """The Riccati integration left the finite numbers or its budget."""
 
@@ -264,8 +264,11 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nf
     Rinv = np.full(2, uscale**2 / gains.rate_weight)
     # scaled coordinates (dz = S y with S = diag(1/sqrt(q))) keep the Riccati equation well balanced
     s = 1 / np.sqrt(q)
-    As = A * (1 / s)[None, :, None] * s[None, None, :]
-    Bs = B * (1 / s)[None, :, None]
+    # in place: a section's rows run to a million, and each (k, 7, 7) array to half a gigabyte
+    As, Bs = A, B
+    As *= (1 / s)[None, :, None]
+    As *= s[None, None, :]
+    Bs *= (1 / s)[None, :, None]
 
     def coeffs(tt):
         j = min(max(int(np.searchsorted(t, tt, side="right")) - 1, 0), t.size - 2)
@@ -286,23 +289,32 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nf
         return dP.ravel()
 
     T = float(t[-1])
+    times = np.unique(t)  # a repeated row (a jump of the rates) has one P
     failed = TrackingLaw(reference=ref, t=t, K=np.zeros((t.size, 2, 7)), success=False,
                          message="the Riccati equation could not be solved over the section", params=params)
     if not (np.all(np.isfinite(As)) and np.all(np.isfinite(Bs)) and np.all(np.isfinite(Rinv))):
         return failed
     try:
         with np.errstate(all="ignore"):
+            # the solver's own interpolant at the rows, step by step (``t_eval``: one evaluation per
+            # step, where a dense-output object evaluated afterwards looks each row's step up again)
             sol = solve_ivp(riccati, (T, float(t[0])), np.eye(7).ravel(), method="LSODA", rtol=1e-6, atol=1e-9,
-                            dense_output=True)
+                            t_eval=times[::-1])
     except _Stop:
         return failed
-    if not sol.success:
+    if not sol.success or sol.y.shape[1] != times.size:
         return failed
-    Ps = sol.sol(t).T.reshape(-1, 7, 7)
-    Ps = 0.5 * (Ps + np.transpose(Ps, (0, 2, 1)))
-    # K (in the original coordinates) = R^-1 B^T P_original, with P_original = S^-1 P_scaled S^-1
-    Ks = Rinv[None, :, None] * np.einsum("kji,kjl->kil", Bs, Ps)
-    K = Ks * (1 / s)[None, None, :]
+    # K (in the original coordinates) = R^-1 B^T P_original, with P_original = S^-1 P_scaled S^-1,
+    # by blocks of rows (the solution's columns run backwards in time; a repeated row reads its time's)
+    column = times.size - 1 - np.searchsorted(times, t)
+    K = np.empty((t.size, 2, 7))
+    for r0 in range(0, t.size, _BLOCK):
+        rows = slice(r0, r0 + _BLOCK)
+        Ps = sol.y[:, column[rows]].T.reshape(-1, 7, 7)
+        Ps = 0.5 * (Ps + np.transpose(Ps, (0, 2, 1)))
+        K[rows] = np.matmul(np.transpose(Bs[rows], (0, 2, 1)), Ps)
+    K *= Rinv[None, :, None]
+    K *= (1 / s)[None, None, :]
     if not np.all(np.isfinite(K)):
         return failed
     return TrackingLaw(reference=ref, t=t, K=K, params=params)
