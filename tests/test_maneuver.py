@@ -64,12 +64,36 @@ def test_polish_rejects_a_duration_of_the_wrong_sign(monkeypatch):
     monkeypatch.setattr(maneuver, "_end_speed", lambda *a: 0.0)
     params = SleighParams()
     y0 = np.zeros(5)
-    sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12)
+    sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12, 0.0)
     assert sol is None and res is None
     # the same root with a positive duration is accepted
     monkeypatch.setattr(maneuver, "root", lambda *a, **k: SimpleNamespace(x=np.array([1.0, 0.5])))
-    sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12)
+    sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12, 0.0)
     assert sol == pytest.approx((0.3, 1.0)) and res == {"end_speed": 0.0, "length": 0.0}
+
+
+def test_polish_integrations_end_at_the_singular_limit(monkeypatch):
+    # Newton's iterates can drive the mass into the singular point, where the step size collapses:
+    # such an integration used to burn its whole evaluation budget (some 30 ms each, most of the
+    # time of a drawing's failing polishes). It now ends at the singular limit, and a manoeuvre
+    # that comes that close is no solution (solve_stop rejects it anyway).
+    from types import SimpleNamespace
+
+    from skatetrace.tracing import maneuver
+
+    seen = []
+
+    def integrate(params, y0, legs_spec, u, tau, **kw):
+        seen.append(kw.get("singular_limit"))
+        return [None] * len(legs_spec), 0, tau, np.array([0.0, 0.0, 0.0, 0.0, 1.0]), "singular"
+
+    monkeypatch.setattr(maneuver, "root", lambda fun, x0, **k: SimpleNamespace(x=np.asarray(x0) if fun(x0)[0] else x0))
+    monkeypatch.setattr(maneuver, "_integrate", integrate)
+    monkeypatch.setattr(maneuver, "_end_speed", lambda *a: 0.0)
+    sol, res, _ = maneuver._polish_stop(SleighParams(), [(1.0, math.inf)], np.zeros(5), 1.0, 1.0, 1.0, 0.3, 2.0,
+                                        1e-10, 1e-12, 0.05)
+    assert sol is None and res is None
+    assert seen and all(v == 0.05 for v in seen)
 
 
 # ---- issue 6: the faster solve finds the same manoeuvres ---------------------------------------

@@ -544,7 +544,8 @@ def solve_stop(
             nfev += sol[2]
         if sol[0] is None:
             alpha0, tau0 = guess()
-            sol = _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol)
+            sol = _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol,
+                               singular_limit * scale)
             nfev += sol[2]
         if sol[0] is None:
             continue
@@ -619,15 +620,16 @@ def _bracket_stop(params, legs_spec, y0, t_max, speed, length, a1, a2, rtol, ato
     return (alpha, tau), res, count
 
 
-def _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol):
+def _polish_stop(params, legs_spec, y0, sign, speed, length, alpha0, tau0, rtol, atol, singular_limit):
     count = 0
 
     def residual(z):
         nonlocal count
         count += 1
         alpha, tau = z[0] * alpha0, z[1] * tau0
-        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol, dense=False)
-        if status != 0 or len(legs) < len(legs_spec) or not np.all(np.isfinite(yf)):
+        legs, status, tf, yf, hit = _integrate(params, y0, legs_spec, alpha, tau, rtol=rtol, atol=atol, dense=False,
+                                               singular_limit=singular_limit)
+        if status != 0 or hit is not None or len(legs) < len(legs_spec) or not np.all(np.isfinite(yf)):
             return np.array([1e3, 1e3])
         v = _end_speed(params, legs_spec, yf, alpha * tau)
         return np.array([v / speed, (abs(yf[4]) - length) / length])
