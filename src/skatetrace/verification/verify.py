@@ -527,39 +527,68 @@ def _schedule_is_the_trace(trace: FigureTrace, schedule: ControlSchedule, si: in
     return bool(np.all(close))
 
 
-def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dict[int, float]]:
+def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dict[int, float], dict[int, dict]]:
     """``rep`` with the rows of ``sections`` replaced by the closed loop's: the model under the
     tracking law about the trace (:func:`skatetrace.feedback.closed_loop.replay_law`). Also the
-    law's largest correction in each (a section whose law could not be designed or whose closed
-    loop could not be integrated is left out, and keeps the open loop's rows and verdict).
+    law's largest correction in each, and the closed loop's own conditioning (a section whose law
+    could not be designed or whose closed loop could not be integrated is left out, and keeps the
+    open loop's rows and verdict).
 
     Each section starts at rest where the figure places it, as the replay does at a curve's start:
     where the previous section ended was checked already (within the tolerance of that point, and
     at rest), and a start error carried over would be corrected by the law and counted against
     the schedule.
+
+    The conditioning is measured as the open loop's (:func:`_conditioning`): the gains scaled by
+    ``1 +- PERTURBATION`` and the closed loop replayed again. On a long section with the mass far
+    from the blade the closed loop can still amplify round-off to the cusp-speed limit (measured:
+    a phosphor spiral's end speed between 0.4 and 2.3 times its limit under such changes), and
+    then its verdict is no more than one run's digits.
     """
     from ..feedback.closed_loop import replay_law
-    from ..feedback.lqr import default_gains, design
+    from ..feedback.lqr import TrackingLaw, default_gains, design
     from ..feedback.reference import section_reference
 
     params = trace.params
-    state, controls = rep.state.copy(), rep.controls.copy()
-    corrections = {}
+    runs = {}
     for si in sections:
-        m = np.flatnonzero(rep.section == si)
         ref = section_reference(trace.sections[si], params)
         law = design(ref, params, default_gains(trace.figure.size()))
         if not law.success:
             continue
         z0 = ref.state_at(0.0)[0][:, 0]
+        m = np.flatnonzero(rep.section == si)
         t = np.clip(rep.t[m] - trace.start_times[si], 0.0, ref.duration)
-        z, rates, correction, ok = replay_law(ref, law, params, z0, t)
-        if not ok:
-            continue  # no closed-loop verdict: the open loop's stands
-        corrections[si] = correction
-        state[:, m] = z[:5]
-        controls[:, m] = np.vstack([z[5:7], rates])
-    return Replay(t=rep.t, state=state, controls=controls, section=rep.section, piece=rep.piece), corrections
+        out = []
+        for f in (1.0, 1.0 + PERTURBATION, 1.0 - PERTURBATION):
+            scaled = law if f == 1.0 else TrackingLaw(reference=ref, t=law.t, K=law.K * f, params=params)
+            z, rates, correction, ok = replay_law(ref, scaled, params, z0, t)
+            if not ok:
+                break
+            out.append((z, rates, correction))
+        if len(out) == 3:
+            runs[si] = (m, out)  # else no closed-loop verdict: the open loop's stands
+    closed = []
+    for k in range(3):
+        state, controls = rep.state.copy(), rep.controls.copy()
+        for m, out in runs.values():
+            z, rates, _ = out[k]
+            state[:, m] = z[:5]
+            controls[:, m] = np.vstack([z[5:7], rates])
+        closed.append(Replay(t=rep.t, state=state, controls=controls, section=rep.section, piece=rep.piece))
+    corrections = {si: out[0][2] for si, (m, out) in runs.items()}
+    _, v0, _ = closed[0].velocities(params)
+    spreads = {}
+    for si, (m, _) in runs.items():
+        xy, v = 0.0, 0.0
+        for other in closed[1:]:
+            _, v1, _ = other.velocities(params)
+            d = np.hypot(*(other.state[3:5, m] - closed[0].state[3:5, m]))
+            xy = max(xy, float(np.max(d, initial=0.0)) if np.all(np.isfinite(d)) else math.inf)
+            ends = m[[0, -1]]
+            v = max(v, float(np.max(np.abs(np.abs(v1[ends]) - np.abs(v0[ends])))))
+        spreads[si] = {"perturbation": PERTURBATION, "position_spread": xy, "cusp_speed_spread": v}
+    return closed[0], corrections, spreads
 
 
 def check_rel_tol(rel_tol) -> None:
@@ -599,7 +628,7 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
         ill = [si for si in failing if conditioning[si]["ill_conditioned"] and _closed_loop_resolves(trace, si)
                and _schedule_is_the_trace(trace, schedule, si)]
         if ill:
-            closed, corrections = _closed_loop(trace, rep, ill)
+            closed, corrections, spreads = _closed_loop(trace, rep, ill)
             ill = list(corrections)
             if ill:
                 decided = closed
@@ -609,8 +638,15 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
                 record["open_loop"] = {k: measured[si][0][k] for k in _OPEN_LOOP_KEYS}
                 record["max_correction"] = corrections[si]
                 record["instrument"] = "closed loop"
-                # the closed loop stands for the schedule only if the law barely departed from it
-                record["passed"] = bool(record["passed"] and corrections[si] <= rel_tol)
+                spread = spreads[si]
+                spread["ill_conditioned"] = bool(spread["position_spread"] >= SPREAD_SHARE * tol
+                                                 or spread["cusp_speed_spread"]
+                                                 >= SPREAD_SHARE * record["cusp_speed_limit"])
+                record["closed_loop_conditioning"] = spread
+                # the closed loop stands for the schedule only if the law barely departed from it,
+                # and only if its own verdict is more than round-off
+                record["passed"] = bool(record["passed"] and corrections[si] <= rel_tol
+                                        and not spread["ill_conditioned"])
                 measured[si] = (record, drifts)
     sections, drifts, cusp_speeds, bad_cusps, problems = [], [], [], [], []
     dev_to, dev_from = 0.0, 0.0
@@ -624,6 +660,12 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
             problems.append(f"section {si}: the closed loop departed from the schedule by "
                             f"{record['max_correction']:.3g} of its fastest rate (limit {rel_tol:g}), "
                             "so it does not vouch for it")
+        if record.get("closed_loop_conditioning", {}).get("ill_conditioned"):
+            c = record["closed_loop_conditioning"]
+            problems.append(f"section {si}: neither replay can decide (the open loop is ill-conditioned, and a change "
+                            f"of {PERTURBATION:g} in the closed loop's gains moves its cusp speed by "
+                            f"{c['cusp_speed_spread']:.3g} (limit {record['cusp_speed_limit']:.3g}) and the blade by "
+                            f"{c['position_spread']:.3g} (tolerance {tol:.3g}))")
         sections.append(record)
         drifts.extend(d)
         if not record["traced"]:
