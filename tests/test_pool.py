@@ -8,6 +8,7 @@ import pytest
 
 import skatetrace as st
 from skatetrace.figures.figure import figure_from_dict
+from skatetrace import processes
 from skatetrace.planning import pool
 from skatetrace.planning.planner import _cusp_pins, _program_options, _warm_options, curve_specs
 
@@ -40,14 +41,14 @@ def _same(a, b):
 
 def test_programs_solved_in_worker_processes_are_the_ones_solved_here(jobs, serial, monkeypatch):
     made = []
-    real = pool.ProcessPoolExecutor
+    real = processes.ProcessPoolExecutor
 
     def spy(*args, **kwargs):
         made.append(kwargs["max_workers"])
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(pool, "ProcessPoolExecutor", spy)
-    monkeypatch.setattr(pool, "_can_fork", lambda: True)
+    monkeypatch.setattr(processes, "ProcessPoolExecutor", spy)
+    monkeypatch.setattr(processes, "_can_fork", lambda: True)
     side_by_side = pool.solve_programs(jobs, workers=2)
     assert made == [2]  # the pool was used, one process per program
     assert all(s.success for s in serial)
@@ -75,8 +76,8 @@ class _BrokenPool:
 
 
 def test_a_pool_that_breaks_loses_nothing(jobs, serial, monkeypatch):
-    monkeypatch.setattr(pool, "ProcessPoolExecutor", _BrokenPool)
-    monkeypatch.setattr(pool, "_can_fork", lambda: True)
+    monkeypatch.setattr(processes, "ProcessPoolExecutor", _BrokenPool)
+    monkeypatch.setattr(processes, "_can_fork", lambda: True)
     again = pool.solve_programs(jobs, workers=2)
     assert len(again) == len(jobs)
     for a, b in zip(serial, again):
@@ -88,7 +89,7 @@ def test_no_fork_while_other_threads_run(jobs, serial, monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("forked while another thread ran")
 
-    monkeypatch.setattr(pool, "ProcessPoolExecutor", refuse)
+    monkeypatch.setattr(processes, "ProcessPoolExecutor", refuse)
     stop = threading.Event()
     other = threading.Thread(target=stop.wait)
     other.start()
@@ -128,9 +129,9 @@ def test_the_default_never_fills_a_many_core_machine(jobs, serial, monkeypatch):
         def __init__(self, *args, max_workers, **kwargs):
             made.append(max_workers)
 
-    monkeypatch.setattr(pool, "available_workers", lambda: 64)
-    monkeypatch.setattr(pool, "ProcessPoolExecutor", Spy)
-    monkeypatch.setattr(pool, "_can_fork", lambda: True)
+    monkeypatch.setattr(processes, "available_workers", lambda: 64)
+    monkeypatch.setattr(processes, "ProcessPoolExecutor", Spy)
+    monkeypatch.setattr(processes, "_can_fork", lambda: True)
     many = [jobs[i % len(jobs)] for i in range(pool.DEFAULT_MAX_WORKERS + 1)]
     again = pool.solve_programs(many)  # the spy's pool loses every answer: solved here instead
     assert made == [pool.DEFAULT_MAX_WORKERS]

@@ -80,7 +80,7 @@ def _end_to_end(name: str) -> tuple[str, bool, str]:
 
 @pytest.fixture(scope="module")
 def traced():
-    from skatetrace.planning.pool import _can_fork, available_workers
+    from skatetrace.processes import _can_fork, available_workers
 
     workers = min(2, available_workers())
     if workers > 1 and _can_fork():

@@ -22,6 +22,7 @@ A section traversed backwards (after a reversal) is solved forwards and mapped b
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from typing import Any
@@ -31,6 +32,7 @@ import numpy as np
 from ..dynamics.model import SleighParams, mass_energy, velocities
 from ..figures.figure import Figure, Section
 from ..figures.geometry import shifted_polynomial, travel
+from ..processes import run_jobs
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
@@ -96,9 +98,10 @@ class TraceOptions:
         Optional bounds of the plan: the mass's acceleration on the ice, and its speed relative to
         the blade.
     workers : int or None
-        Processes in which the planner solves its independent programs side by side (the distinct
-        sections' warm starts, the curves' linked programs): None uses every core this process may
-        run on, up to 8; 1 solves them one after another. The plan is the same either way.
+        Processes in which independent work runs side by side: the planner's programs (the
+        distinct sections' warm starts, the curves' linked programs) and the tracer's distinct
+        sections. None uses every core this process may run on, up to 8; 1 runs them one after
+        another. The plan and the trace are the same either way.
     """
 
     speed: float = 1.0
@@ -708,10 +711,16 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
     cache = {} if cache is None else cache
     traces, starts, t = [], [], 0.0
     all_sections = [(ci, sec) for ci, curve in enumerate(figure.curves) for sec in curve.sections()]
-    for done, (ci, sec) in enumerate(all_sections, 1):
-        key = _section_key(params, sec, options)
-        if key not in cache:
-            cache[key] = trace_section(params, sec, options, ci)
+    keys = [_section_key(params, sec, options) for _, sec in all_sections]
+    todo = {}  # the distinct sections not solved yet, in skating order
+    for (ci, sec), key in zip(all_sections, keys):
+        if key not in cache and key not in todo:
+            todo[key] = (params, sec, options, ci)
+    solved = _solve_sections(list(todo.values()), options.workers)
+    pending = iter(todo)
+    for done, ((ci, sec), key) in enumerate(zip(all_sections, keys), 1):
+        while key not in cache:  # the next distinct section is this one: wait for it
+            cache[next(pending)] = next(solved)
         proto = cache[key]
         tr = SectionTrace(
             success=proto.success, status=proto.status, message=proto.message, curve_index=ci, section=sec,
@@ -724,3 +733,30 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
         if progress is not None:
             progress(done, len(all_sections))
     return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))
+
+
+#: A pool of worker processes costs some tens of milliseconds to start and to hand the sections
+#: over: sections are traced here until they have taken this long (seconds), the rest in a pool.
+_POOL_WORTH = 0.05
+
+
+def _trace_job(job) -> SectionTrace:
+    params, section, options, curve_index = job
+    return trace_section(params, section, options, curve_index)
+
+
+def _solve_sections(jobs: list, workers: int | None):
+    """The traces of ``jobs`` (``trace_section``'s arguments), yielded in order as each is known.
+
+    They are traced here until they have taken ``_POOL_WORTH`` seconds (a figure of a few distinct
+    sections is done by then; the first one also loads or compiles the integrator, which forked
+    workers then share), and the rest side by side in worker processes
+    (:func:`skatetrace.processes.run_jobs`). Each section is traced by the same code either way:
+    the traces do not depend on ``workers``.
+    """
+    started = time.perf_counter()
+    here = 0
+    while here < len(jobs) and (here == 0 or time.perf_counter() - started <= _POOL_WORTH):
+        yield _trace_job(jobs[here])
+        here += 1
+    yield from run_jobs(_trace_job, jobs[here:], workers)

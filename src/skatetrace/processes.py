@@ -1,0 +1,108 @@
+"""Independent jobs side by side: forked worker processes, or one after another.
+
+The planner's programs (each distinct section's warm start, each curve's linked program) and the
+tracer's distinct sections are independent of one another: on a machine with two cores the two
+halves of such a batch take half the time. IPOPT and MUMPS run on one core each, CasADi's
+functions hold Python's lock, and the tracer's manoeuvres are many short compiled integrations
+called from Python, so the jobs run in processes, not threads.
+
+Processes are forked (the children share the parent's imported modules and compiled code, so a
+pool costs milliseconds, not the seconds of importing CasADi or loading numba's cache again);
+where forking is not safe (no ``fork`` on the platform, or other threads running in this process,
+which a fork would leave holding their locks) the jobs run one after another, and so does a batch
+of one. A worker that dies (a pool that breaks) costs nothing already done: the jobs without an
+answer are run here. Every job runs the same code either way, so the answers do not depend on
+``workers``.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import threading
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from typing import Callable, Iterator, Sequence, TypeVar
+
+__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "run_jobs", "worker_count"]
+
+#: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
+#: hundred MB, so a many-core machine is not filled with them by default.
+DEFAULT_MAX_WORKERS = 8
+
+J = TypeVar("J")
+R = TypeVar("R")
+
+
+def available_workers() -> int:
+    """The cores this process may run on (its CPU affinity where the platform tells it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - platforms without sched_getaffinity
+        return max(1, os.cpu_count() or 1)
+
+
+def worker_count(jobs: int, workers: int | None) -> int:
+    """Processes for ``jobs`` jobs: ``workers``, or with None :func:`available_workers` up to
+    :data:`DEFAULT_MAX_WORKERS`; never more than there are jobs."""
+    return min(jobs, min(available_workers(), DEFAULT_MAX_WORKERS) if workers is None else int(workers))
+
+
+def _can_fork() -> bool:
+    return "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+
+
+def _quiet_on_interrupt() -> None:
+    """In a worker: Ctrl-C (which a terminal sends to every process of the run) ends it at once and
+    quietly; the parent reports the interrupt."""
+    signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel the jobs not started and end the workers (an interrupt reached the parent only, say)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        process.terminate()
+
+
+def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None) -> Iterator[R]:
+    """``fn(job)`` for every job, yielded in the order of ``jobs`` as each becomes known.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (the workers are forked, but its results come back pickled).
+    jobs : sequence
+        The arguments, one per call; they and the results must pickle.
+    workers : int or None
+        Processes to run them in (:func:`worker_count`); 1, or a batch of one, runs them here, one
+        after another.
+
+    Yields
+    ------
+    The results, in order. A job whose worker died is run here. Ctrl-C stops the workers at once
+    and raises :class:`KeyboardInterrupt` here.
+    """
+    count = worker_count(len(jobs), workers)
+    done = 0
+    if count > 1 and _can_fork():
+        try:
+            with ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("fork"),
+                                     initializer=_quiet_on_interrupt) as pool:
+                futures = [pool.submit(fn, job) for job in jobs]
+                try:
+                    for future in futures:
+                        try:
+                            result = future.result()
+                        except BrokenProcessPool:
+                            break
+                        done += 1
+                        yield result
+                except (KeyboardInterrupt, GeneratorExit):  # Ctrl-C, or the caller stopped asking
+                    _stop(pool)
+                    raise
+        except BrokenProcessPool:
+            pass
+    for job in jobs[done:]:
+        yield fn(job)
