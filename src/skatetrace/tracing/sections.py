@@ -748,15 +748,18 @@ def _trace_job(job) -> SectionTrace:
 def _solve_sections(jobs: list, workers: int | None):
     """The traces of ``jobs`` (``trace_section``'s arguments), yielded in order as each is known.
 
-    They are traced here until they have taken ``_POOL_WORTH`` seconds (a figure of a few distinct
-    sections is done by then; the first one also loads or compiles the integrator, which forked
-    workers then share), and the rest side by side in worker processes
-    (:func:`skatetrace.processes.run_jobs`). Each section is traced by the same code either way:
-    the traces do not depend on ``workers``.
+    The first is traced here (it also loads or compiles the integrator, which forked workers then
+    share, so its time says nothing of the others'); then the next ones until they have taken
+    ``_POOL_WORTH`` seconds (a figure of a few distinct sections is done by then), and the rest
+    side by side in worker processes (:func:`skatetrace.processes.run_jobs`). Each section is
+    traced by the same code either way: the traces do not depend on ``workers``.
     """
+    if not jobs:
+        return
+    yield _trace_job(jobs[0])
     started = time.perf_counter()
-    here = 0
-    while here < len(jobs) and (here == 0 or time.perf_counter() - started <= _POOL_WORTH):
+    here = 1
+    while here < len(jobs) and time.perf_counter() - started <= _POOL_WORTH:
         yield _trace_job(jobs[here])
         here += 1
     yield from run_jobs(_trace_job, jobs[here:], workers)
