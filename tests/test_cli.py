@@ -223,7 +223,6 @@ def _no_work(monkeypatch):
         raise AssertionError("work started before the output folder was checked")
 
     monkeypatch.setattr(cli, "_resolve", forbidden)
-    monkeypatch.setattr(cli, "_compile_once", forbidden)
 
 
 @pytest.mark.parametrize("command", [["trace", "circle"], ["fit", str(EXAMPLES / "points-eight.csv")],
@@ -421,26 +420,39 @@ def test_animate_refuses_a_time_outside_the_figure_and_lists_suffixes(tmp_path, 
 
 
 def test_first_run_says_it_compiles_once(tmp_path, capsys, monkeypatch):
+    """One line the first time numba compiles a part, then a line per part as it starts and ends;
+    nothing where everything loads from the cache (the parts compile for real in test_compiled.py)."""
+    from contextlib import contextmanager
+
     import skatetrace.cli.compiled as compiled
 
     calls = []
 
-    def warm_up(progress=None):
-        for i, part in enumerate(("a", "b"), 1):
-            progress(part, i, 2)
+    @contextmanager
+    def reporting(progress):
         calls.append(1)
-        return 21.0
+        progress("a", None)
+        progress("a", 6.2)
+        progress("b", None)
+        progress("b", 4.0)
+        yield
 
-    monkeypatch.setattr(compiled, "cache_is_warm", lambda: False)
-    monkeypatch.setattr(compiled, "warm_up", warm_up)
+    monkeypatch.setattr(compiled, "reporting", reporting)
     assert main(["trace", "line", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 0
     err = capsys.readouterr().err
-    assert err.count("compiling the numerical core, once (about 15 s; later runs reuse it)") == 1
-    assert "compiling a (1/2)" in err and "compiling b (2/2)" in err and "compiled in 21 s" in err
+    assert err.count("first run on this machine: compiling the numerical core") == 1
+    assert "  compiling a\n  compiled a in 6 s\n  compiling b\n  compiled b in 4 s\n" in err
     assert calls == [1]
-    monkeypatch.setattr(compiled, "cache_is_warm", lambda: True)
+
+    @contextmanager
+    def warm(progress):
+        yield
+
+    monkeypatch.setattr(compiled, "reporting", warm)
     assert main(["trace", "line", "--out", str(tmp_path / "o"), "--no-plots", "--no-viewer"]) == 0
-    assert "compiling" not in capsys.readouterr().err and calls == [1]
+    assert "compil" not in capsys.readouterr().err
+    assert main(["figures"]) == 0  # a command that compiles nothing does not listen at all
+    assert calls == [1]
 
 
 def _arc_file(tmp_path):

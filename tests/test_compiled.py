@@ -37,3 +37,44 @@ def test_a_fresh_cache_is_cold_then_warm_in_the_next_process(tmp_path):
     assert first.stdout.split("\n")[:2] == ["False", "5 (1, 5)"]
     again = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert again.stdout.split("\n")[:2] == ["True", "0 None"]
+
+
+@pytest.mark.slow
+def test_a_first_run_compiles_only_what_it_needs_and_says_so(tmp_path):
+    """A launch-glide-stop trace compiles the integrator, the replay and the distance checks, named
+    as they compile, and neither the closed-loop replay nor the planner's finish (half the time of
+    compiling everything); the next run compiles nothing and says nothing of it."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    cmd = [sys.executable, "-m", "skatetrace", "trace", "line", "--out", str(tmp_path / "o"), "--no-plots",
+           "--no-viewer"]
+    first = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
+    assert first.stderr.count("first run on this machine") == 1
+    assert "  compiling the manoeuvre integrator\n" in first.stderr
+    assert "  compiled the manoeuvre integrator in " in first.stderr
+    # the verification's parts compile in a second process while the run traces (or, should that
+    # process not be done in time, in the run itself, said as the integrator is)
+    assert "  compiling the verification's parts alongside, in a second process\n" in first.stderr
+    for part in ("the verifying replay", "the distance checks"):
+        assert (f"  compiling {part}\n" in first.stderr) == (f"  compiled {part} in " in first.stderr)
+    assert "closed-loop" not in first.stderr and "finish" not in first.stderr
+    again = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
+    assert "compil" not in again.stderr
+
+
+@pytest.mark.slow
+def test_compile_ahead_fills_the_cache_with_the_types_verification_uses(tmp_path):
+    """The second process compiles the replay and the distance checks through their own callers on
+    tiny inputs: afterwards a real verification in another process loads them and compiles neither
+    (a mismatch of argument types would compile them again)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    ahead = ("import skatetrace.cli.compiled as c; p = c.compile_ahead(); p.join(); print(p.exitcode); "
+             "print(c._part_is_cached('the verifying replay'), c._part_is_cached('the distance checks')); "
+             "print(c.compile_ahead())")
+    out = subprocess.run([sys.executable, "-c", ahead], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split("\n")[:3] == ["0", "True True", "None"]  # nothing left to compile ahead
+    run = ("import skatetrace as st, skatetrace.cli.compiled as c; from skatetrace.figures.patterns import pattern; "
+           "tr = st.trace_figure(pattern('circle')); parts = []; "
+           "ctx = c.reporting(lambda part, s: parts.append(part)); ctx.__enter__(); r = st.verify(tr); "
+           "print(r.success, sorted(set(parts)))")
+    out = subprocess.run([sys.executable, "-c", run], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "True []"

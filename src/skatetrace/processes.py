@@ -25,7 +25,7 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "run_jobs", "worker_count"]
+__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "quiet_on_interrupt", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
 #: hundred MB, so a many-core machine is not filled with them by default.
@@ -53,7 +53,7 @@ def _can_fork() -> bool:
     return "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
 
 
-def _quiet_on_interrupt() -> None:
+def quiet_on_interrupt() -> None:
     """In a worker: Ctrl-C (which a terminal sends to every process of the run) ends it at once and
     quietly; the parent reports the interrupt."""
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
@@ -89,7 +89,7 @@ def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None
     if count > 1 and _can_fork():
         try:
             with ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("fork"),
-                                     initializer=_quiet_on_interrupt) as pool:
+                                     initializer=quiet_on_interrupt) as pool:
                 futures = [pool.submit(fn, job) for job in jobs]
                 try:
                     for future in futures:

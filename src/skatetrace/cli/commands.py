@@ -13,6 +13,7 @@ import json
 import math
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import SkatetraceError
@@ -307,16 +308,30 @@ def _print_feasibility(done) -> None:
         print(f"skatetrace: warning: {done.verdict}", file=sys.stderr)
 
 
-def _compile_once() -> None:
-    """Where numba's cache is cold (a first run): say so, and compile part by part, saying which."""
-    from .compiled import cache_is_warm, warm_up
+@contextmanager
+def _compiling():
+    """Name each part of the numerical core as this run compiles it (a first run on a machine: numba's
+    cache is cold), after one line saying so; silent where everything loads from the cache."""
+    from .compiled import compile_ahead, reporting
 
-    if cache_is_warm() is not False:
-        return
-    print("skatetrace: compiling the numerical core, once (about 15 s; later runs reuse it)", file=sys.stderr,
-          flush=True)
-    seconds = warm_up(lambda part, i, n: print(f"  compiling {part} ({i}/{n})", file=sys.stderr, flush=True))
-    print(f"  compiled in {seconds:.0f} s", file=sys.stderr, flush=True)
+    said = []
+
+    def say(part: str, seconds: float | None) -> None:
+        if not said:
+            said.append(True)
+            print("skatetrace: first run on this machine: compiling the numerical core, the parts this run needs, "
+                  "once (later runs load them)", file=sys.stderr, flush=True)
+        if part == "ahead":
+            print("  compiling the verification's parts alongside, in a second process", file=sys.stderr, flush=True)
+        elif seconds is None:
+            print(f"  compiling {part}", file=sys.stderr, flush=True)
+        else:
+            print(f"  compiled {part} in {seconds:.0f} s", file=sys.stderr, flush=True)
+
+    if compile_ahead() is not None:  # a first run: the verification compiles while the run traces
+        say("ahead", None)
+    with reporting(say):
+        yield
 
 
 def _unplanned_if_better(done, figure, params, options, args, limits, progress):
@@ -331,7 +346,6 @@ def _unplanned_if_better(done, figure, params, options, args, limits, progress):
     unbounded = dataclasses.replace(options, reach=None)
     again = trace_and_verify(figure, params, unbounded, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
                              progress=progress)
-    print(file=sys.stderr)
     if not all(s.success for s in again.trace.sections):
         return done, options
     print(f"note: not every section could be planned within the default reach {options.reach:.4g} m "
@@ -358,15 +372,14 @@ def _trace(args) -> int:
               f"of the blade for least {options.objective} (--reach none: the launch-glide-stop manoeuvres)")
     for note in res.notes:
         print(f"note: {note}")
-    _compile_once()
 
     def progress(done, total):
-        print(f"\rtracing sections {done}/{total}", end="", file=sys.stderr, flush=True)
+        # the line ends with the round, so that what verification says (compiling, first time) starts a line
+        print(f"\rtracing sections {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
 
     limits = _human_limits(args, res, params)
     done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
                             progress=progress)
-    print(file=sys.stderr)
     if args.reach is None and options.reach is not None and not all(s.success for s in done.trace.sections):
         done, options = _unplanned_if_better(done, figure, params, options, args, limits, progress)
     figure, trace, schedule, states, report = done.figure, done.trace, done.schedule, done.states, done.report
@@ -540,7 +553,6 @@ def _reproduce(args) -> int:
         raise SkatetraceError(f"--arcs must be comma-separated arc numbers 1, 2, 3, got {args.arcs!r}") from None
     if args.maxiter is not None and args.maxiter < 1:
         raise SkatetraceError(f"--maxiter must be a positive number of iterations, got {args.maxiter}")
-    _compile_once()
     rep = reproduce(methods, arcs, maxiter=args.maxiter, conditioning=not args.no_conditioning,
                     progress=lambda msg: print(msg, file=sys.stderr, flush=True))
     t0 = time.perf_counter()
@@ -636,7 +648,6 @@ def _tradeoff(args) -> int:
     reaches = _reaches(args, res.unit)
     options = TraceOptions(speed=speed, objective=args.objective, max_accel=args.max_accel, workers=args.workers,
                            reach=min(reaches))  # checks the objective's needs before any work
-    _compile_once()
     unit = "m" if res.unit == "m" else "model units"
     print(f"planning {res.figure.name} within {len(reaches)} reaches ({', '.join(f'{r:.3g}' for r in sorted(reaches))} "
           f"{unit}) and with the launch-glide-stop manoeuvres, least {args.objective}")
@@ -669,7 +680,10 @@ def _tradeoff(args) -> int:
 def _run(args) -> int:
     commands = {"figures": _figures, "fit": _fit, "reproduce": _reproduce, "animate": _animate, "view": _view,
                 "trace": _trace, "tradeoff": _tradeoff, "robustness": _robustness}
-    return commands[args.command](args)
+    if args.command in ("figures", "animate", "view"):  # nothing compiled: numba need not even be imported
+        return commands[args.command](args)
+    with _compiling():
+        return commands[args.command](args)
 
 
 def _output_folder(args):
