@@ -209,36 +209,19 @@ def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
         Seconds taken.
     """
     start = time.perf_counter()
-    listener = None
-    if progress is not None:
-        from numba.core import event
+    order = [part for part, _ in ENTRY_POINTS]
 
-        parts = {id(d.py_func): part for part, d in _dispatchers()}
-        order = [part for part, _ in ENTRY_POINTS]
-        seen: set[str] = set()
+    def started(part: str, seconds: float | None) -> None:
+        if progress is not None and seconds is None:
+            progress(part, order.index(part) + 1, len(order))
 
-        class _Listener(event.Listener):
-            def on_start(self, ev):
-                part = parts.get(id(getattr(ev.data.get("dispatcher"), "py_func", None)))
-                if part is not None and part not in seen:
-                    seen.add(part)
-                    progress(part, order.index(part) + 1, len(order))
-
-            def on_end(self, ev):
-                pass
-
-        listener = _Listener()
-        event.register("numba:compile", listener)
-    try:
+    with reporting(started):
         from ..figures.patterns import pattern
         from ..pipeline import trace_and_verify
         from ..tracing.sections import TraceOptions
 
         _replay_under_a_law(trace_and_verify(pattern("circle"), options=TraceOptions()).trace)
         _finish_at_rest()
-    finally:
-        if listener is not None:
-            event.unregister("numba:compile", listener)
     return time.perf_counter() - start
 
 

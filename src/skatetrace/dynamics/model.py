@@ -202,18 +202,11 @@ def singular_point(params: SleighParams, kappa: float) -> tuple[float, float]:
 
 
 def rhs_jacobian(params: SleighParams, state, a, b, adot, bdot):
-    """Partial derivatives of :func:`rhs`, exact (the quotient rule on :func:`velocities`' fractions).
+    """Partial derivatives of :func:`rhs` (same arguments), exact: the quotient rule on the fractions
+    of :func:`body_velocities`.
 
-    Parameters
-    ----------
-    state : array_like, shape (5,) or (5, n)
-    a, b, adot, bdot : float or array_like, shape (n,)
-
-    Returns
-    -------
-    ndarray, shape (5, 9) or (5, 9, n)
-        ``J[i, j]`` is the derivative of row ``i`` of :func:`rhs` with respect to variable ``j`` of
-        ``(p1, p2, theta, x, y, a, b, adot, bdot)``.
+    Returns an array of shape ``(5, 9)`` (or ``(5, 9, n)``): ``J[i, j]`` is the derivative of row
+    ``i`` of :func:`rhs` with respect to variable ``j`` of ``(p1, p2, theta, x, y, a, b, adot, bdot)``.
     """
     M, m, I = params.M, params.m, params.I
     p1, p2, theta = (np.asarray(v, dtype=float) for v in (state[0], state[1], state[2]))
@@ -224,9 +217,7 @@ def rhs_jacobian(params: SleighParams, state, a, b, adot, bdot):
     D = Mm * (I + m * a * a) + M * m * b * b
     q = p1 - m * a * bdot
     r = p2 + M * adot
-    xi1 = (Mm * q + m * b * r) / D
-    xi2 = (m * (b * q - (I + m * a * a) * adot) + (I + m * (a * a + b * b)) * p2) / D
-    eta = ((M * m * b * b + I * Mm) * bdot + a * (Mm * p1 + m * b * r)) / D
+    xi1, xi2, eta = body_velocities(M, m, I, p1, p2, a, b, adot, bdot)
     # each velocity's numerator N over D: d(N / D) = (dN - (N / D) dD) / D, by (p1, p2, a, b, adot, bdot)
     dD = (zero, zero, 2 * Mm * m * a + zero, 2 * M * m * b + zero, zero, zero)
     dN = {
