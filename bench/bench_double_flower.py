@@ -1,6 +1,6 @@
 """Benchmark: the double flower end to end (trace, sample, verify), warm and from a cold CLI start.
 
-Run: python bench/bench_double_flower.py [N] [--cold K] [--figure NAME] [--quiet]
+Run: python bench/bench_double_flower.py [N] [--cold K] [--first K] [--figure NAME] [--quiet]
 
 - warm: in this process, one untimed warm-up run (it loads or compiles numba's integrator), then N
   timed runs of trace_figure / schedule_from_trace / verify; the median of each stage and of the
@@ -15,6 +15,11 @@ Run: python bench/bench_double_flower.py [N] [--cold K] [--figure NAME] [--quiet
   (``compileall``, as ``pip install`` does and as any run leaves it where Python may write
   ``__pycache__``): a cold start loads bytecode; it does not compile the sources (this sandbox sets
   ``PYTHONDONTWRITEBYTECODE=1``, which would otherwise make every start compile them, about 0.15 s).
+- first run (issue 18): K runs of the README's main job, ``python -m skatetrace.cli trace NAME --out
+  TMP`` (plots and viewer included), each with an empty numba cache of its own (``NUMBA_CACHE_DIR``
+  set to a new folder: numba then neither reads nor writes the caches beside the sources), so each
+  compiles what a first run after a fresh install compiles; median wall time, and the parts the CLI
+  said it compiled. ``--first 0`` (the default) skips this part.
 - engines: the replay once more with ``verify.replay(..., engine="scipy")`` (solve_ivp with a Python
   right-hand side, the pre-compilation path) beside the median compiled replay, in this process:
   their ratio is the compiled replay's speed-up (``--no-engines`` skips it).
@@ -97,10 +102,31 @@ def cold_runs(name: str, k: int) -> dict:
             "byte_compiled": bool(compiled)}
 
 
+def first_runs(name: str, k: int) -> dict:
+    """The README's main job with an empty numba cache, ``k`` times (a first run after a fresh install)."""
+    import os
+
+    cmd = cli_command()
+    walls, codes, compiled = [], [], []
+    for _ in range(k):
+        with tempfile.TemporaryDirectory(prefix="skatetrace-first-") as tmp:
+            env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba")}
+            t0 = time.perf_counter()
+            proc = subprocess.run(cmd + ["trace", name, "--out", str(Path(tmp) / "out")], capture_output=True,
+                                  text=True, env=env)
+            walls.append(time.perf_counter() - t0)
+        codes.append(proc.returncode)
+        compiled.append(re.findall(r"compiled (.+?) in ([0-9]+) s", proc.stderr))
+    return {"command": cmd + ["trace", name, "--out", "TMP"], "runs": k, "wall": walls, "wall_median": median(walls),
+            "returncodes": codes, "success": all(c == 0 for c in codes), "compiled": compiled[-1],
+            "ahead": k > 0 and "alongside" in proc.stderr}
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("n", nargs="?", type=int, default=3, help="warm runs (median reported; default 3)")
     ap.add_argument("--cold", type=int, default=3, help="cold CLI runs (default 3; 0 skips them)")
+    ap.add_argument("--first", type=int, default=0, help="first runs with an empty numba cache (default 0: none)")
     ap.add_argument("--figure", default="double-flower", help="built-in figure (default double-flower)")
     ap.add_argument("--quiet", action="store_true", help="print nothing; just return the results")
     ap.add_argument("--no-engines", action="store_true", help="do not time the solve_ivp replay for comparison")
@@ -142,6 +168,13 @@ def main(argv=None) -> dict:
         print(f"cold CLI start ({' '.join(cold['command'][1:])}), median of {args.cold}: "
               f"{cold['wall_median']:.2f} s wall; the CLI reports {cold['reported_median']:.2f} s of work; "
               f"'import skatetrace.cli' alone {cold['import_median']:.2f} s; exit codes {cold['returncodes']}")
+    if args.first > 0:
+        first = first_runs(args.figure, args.first)
+        out["first"] = first
+        parts = ", ".join(f"{part} {sec} s" for part, sec in first["compiled"]) or "nothing"
+        print(f"first run with an empty numba cache ({' '.join(first['command'][1:])}), median of {args.first}: "
+              f"{first['wall_median']:.2f} s wall; compiled in the run: {parts}"
+              f"{'; the verification compiled alongside' if first['ahead'] else ''}; exit codes {first['returncodes']}")
     return out
 
 

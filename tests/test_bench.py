@@ -110,7 +110,7 @@ def test_run_all_smoke(tmp_path, capsys):
     out = _load("run_all").main(["--smoke", "--out", str(tmp_path / "RESULTS.md")])
     assert (results.stat().st_mtime_ns if results.exists() else None) == before  # bench/RESULTS.md untouched
     text = (tmp_path / "RESULTS.md").read_text()
-    for heading in ("## Machine", "## Versions", "## Targets (issue 6)", "## 1. The paper's three arcs",
+    for heading in ("## Machine", "## Versions", "## Targets (issues 6, 15, 18)", "## 1. The paper's three arcs",
                     "## 2. line end to end", "## 3. A long figure: 3 distinct arcs", "## 4. Scaling",
                     "## 5. Bounded-reach planning (issue 15)", "| paper-arc |",
                     "## Profile and what would close the gap", "Smoke mode", "Load average"):
@@ -118,13 +118,15 @@ def test_run_all_smoke(tmp_path, capsys):
     for pkg in ("numpy", "scipy", "numba", "matplotlib", "skatetrace"):
         assert f"| {pkg} |" in text
     keys = {t["key"] for t in out["targets"]}
-    assert {"flower_warm", "flower_cold", "paper_arc_1", "paper_arc_2", "paper_arc_3", "long_trace", "long_total",
+    assert {"flower_warm", "flower_cold", "flower_first", "paper_arc_1", "paper_arc_2", "paper_arc_3", "long_trace", "long_total",
             "linear_trace", "linear_total", "plan_paper-arc"} <= keys
     assert all(t["met"] in (True, False, None) for t in out["targets"])
     res = out["results"]
     assert all(r["exact_success"] and r["exact_residual"] <= 1e-10 for r in res["paper_arcs"])
     assert res["long_figure"]["traced"] == 3 and res["long_figure"]["verify_success"]
     assert res["double_flower"]["cold"]["success"]
+    first = res["double_flower"]["first"]  # a real first run: the integrator compiled in it
+    assert first["success"] and any(part == "the manoeuvre integrator" for part, _ in first["compiled"])
     # every table row has as many cells as its header (a '|' inside a cell would break it)
     lines = text.splitlines()
     for i, line in enumerate(lines):
