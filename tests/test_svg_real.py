@@ -163,6 +163,13 @@ def test_an_empty_nested_viewport_is_an_error_not_a_silent_loss():
                      '<path d="M 0 5 L 1 5"/>'))
 
 
+def test_a_path_without_data_is_named_not_reported_as_a_library_error():
+    """A <path> whose d a script was to fill in (the corpus's rhodonea): svgelements raises a
+    TypeError on it; the message names the path and says what to do."""
+    with pytest.raises(DrawingError, match=r"<path id='p1'> has no path data \(no d attribute\).*script"):
+        read_svg(svg('<path id="p1" stroke="#fff" fill="none"/><path d="M 0 0 L 1 1" stroke="black"/>'))
+
+
 # --- hostile and unusual XML ------------------------------------------------------------------------------
 
 BOMB = ('<?xml version="1.0"?><!DOCTYPE svg [<!ENTITY a "aaaaaaaaaa">'

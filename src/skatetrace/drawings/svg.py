@@ -4,18 +4,17 @@ The one module that knows SVG: it alone imports the SVG parsers (defusedxml and 
 
 Reading
 -------
-The document is parsed first with defusedxml, which refuses DTDs that declare entities (an "XML bomb"
-expands a few into gigabytes; plain text ones, as Illustrator writes, are inlined first by
-:mod:`.svg_entities`) and external references (``<!ENTITY x SYSTEM "file:///etc/passwd">``). The same
-bytes then go to svgelements' ``SVG.parse``, which expands ``<use>`` (``href`` or ``xlink:href``, of
-shapes, groups, symbols and other ``<use>``), applies ``<style>`` sheets (selectors ``*``, ``tag``,
-``#id``, ``.class``, ``tag.class``) and ``style`` attributes with inheritance, converts lengths in
-units (``mm``, ``cm``, ``in``, ``pt``, ``pc``, ``%``) to user units at 96 per inch, and composes
-every transform, nested ``<svg>`` viewports included. Where svgelements departs from SVG,
-:mod:`.svg_style` and this module correct it: a ``<symbol>`` (or a ``<marker>``, ``<mask>``) is drawn
-only through a ``<use>``, a ``<use>`` of a ``<symbol>`` with a ``viewBox`` maps it onto the
-``<use>``'s width and height, a ``<switch>`` draws one child, a nested ``<svg>`` without ``viewBox`` is
-moved to its ``x``, ``y``, visibility is read. ``<use>`` cycles and expansions past ``MAX_ELEMENTS`` are refused.
+The document is parsed first with defusedxml, which refuses DTDs that declare entities (an "XML bomb" expands a few
+into gigabytes; plain text ones, as Illustrator writes, are inlined first by :mod:`.svg_entities`) and external
+references (``<!ENTITY x SYSTEM "file:///etc/passwd">``). The same bytes then go to svgelements' ``SVG.parse``, which
+expands ``<use>`` (``href`` or ``xlink:href``, of shapes, groups, symbols and other ``<use>``), applies ``<style>``
+sheets (selectors ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``) and ``style`` attributes with inheritance,
+converts lengths in units (``mm``, ``cm``, ``in``, ``pt``, ``pc``, ``%``) to user units at 96 per inch, and composes
+every transform, nested ``<svg>`` viewports included. Where svgelements departs from SVG, :mod:`.svg_style` and this
+module correct it: a ``<symbol>`` (or a ``<marker>``, ``<mask>``) is drawn only through a ``<use>``, a ``<use>`` of a
+``<symbol>`` with a ``viewBox`` maps it onto the ``<use>``'s width and height, a ``<switch>`` draws one child, a
+nested ``<svg>`` without ``viewBox`` is moved to its ``x``, ``y``, visibility is read. ``<use>`` cycles and expansions
+past ``MAX_ELEMENTS`` are refused.
 
 Coordinates
 -----------
@@ -103,28 +102,25 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     Raises
     ------
     DrawingError
-        Missing or unreadable file, malformed XML, a DTD that declares entities or refers to
-        external files, a ``<use>`` cycle or more than ``MAX_ELEMENTS`` elements after expanding
-        ``<use>``, invalid ``transform`` or path data, a singular transform, an element made only of
-        zero-length segments or of zero size, non-finite or huge coordinates, or a document without
-        any drawable element.
+        Missing or unreadable file, malformed XML, a DTD that declares entities or refers to external files, a
+        ``<use>`` cycle or more than ``MAX_ELEMENTS`` elements after expanding ``<use>``, invalid ``transform`` or
+        path data, a singular transform, an element made only of zero-length segments or of zero size, non-finite or
+        huge coordinates, or a document without any drawable element.
 
     Notes
     -----
-    Shapes read: ``path``, ``rect`` (also rounded), ``circle``, ``ellipse``, ``line``, ``polyline``
-    and ``polygon``, inside the root, ``<g>``, ``<a>``, ``<switch>`` (its first child without
-    conditions), nested ``<svg>`` viewports and ``<use>`` clones (of shapes, groups, ``<symbol>``,
-    other ``<use>``), with every ``transform``, ``x``/``y`` and viewport on the way. Lengths in
-    units are user units at 96 per inch. ``<defs>``, ``<symbol>``, ``<marker>``, ``<mask>``,
-    ``<clipPath>`` and ``<pattern>`` are never drawn by themselves. CSS from ``<style>`` sheets
-    (simple selectors: ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``; not descendant or
-    attribute selectors, nor rules after the element they would style) and ``style`` attributes
-    are applied. Elements hidden by ``display:none`` or ``visibility:hidden`` (on them or
-    inherited) are skipped, and so are elements that paint nothing (fill and stroke ``none``: the
-    invisible frames of icon sets) where anything else is painted; ``notes`` lists what was
-    skipped. A CSS ``transform`` applies like the attribute (without ``transform-origin``). Not
-    read: text, images, clip paths and masks (the full shape is read), markers, external ``href``
-    (``other.svg#id``). An SVG without the SVG namespace declaration is read as if it had one.
+    Shapes read: ``path``, ``rect`` (also rounded), ``circle``, ``ellipse``, ``line``, ``polyline`` and ``polygon``,
+    inside the root, ``<g>``, ``<a>``, ``<switch>`` (its first child without conditions), nested ``<svg>`` viewports
+    and ``<use>`` clones (of shapes, groups, ``<symbol>``, other ``<use>``), with every ``transform``, ``x``/``y`` and
+    viewport on the way. Lengths in units are user units at 96 per inch. ``<defs>``, ``<symbol>``, ``<marker>``,
+    ``<mask>``, ``<clipPath>`` and ``<pattern>`` are never drawn by themselves. CSS from ``<style>`` sheets (simple
+    selectors: ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``; not descendant or attribute selectors, nor rules
+    after the element they would style) and ``style`` attributes are applied. Elements hidden by ``display:none`` or
+    ``visibility:hidden`` (on them or inherited) are skipped, and so are elements that paint nothing (fill and stroke
+    ``none``: the invisible frames of icon sets) where anything else is painted; ``notes`` lists what was skipped. A
+    CSS ``transform`` applies like the attribute (without ``transform-origin``). Not read: text, images, clip paths
+    and masks (the full shape is read), markers, external ``href`` (``other.svg#id``). An SVG without the SVG
+    namespace declaration is read as if it had one.
 
     Examples
     --------
@@ -298,9 +294,13 @@ def _parse_svg(data: bytes | str, root: ET.Element, origin: str, notes: list[str
         except RecursionError:
             raise DrawingError(f"{origin} nests its elements too deeply to be read") from None
         except _LIBRARY_ERRORS as exc:
-            for element in root.iter():  # the likely culprit: path data that svgelements fails on
+            for element in root.iter():  # the likely culprits: path data that svgelements fails on, or none
                 if local_tag(element.tag) == "path" and element.get("d"):
                     _parse_d(element.get("d"), f"{origin}: {_describe(element)}", [])
+                elif local_tag(element.tag) == "path" and element.get("d") is None:
+                    raise DrawingError(f"{origin}: {_describe(element)} has no path data (no d attribute), which "
+                                       "svgelements cannot read: give it its d, or remove it (is it drawn by a "
+                                       "script? skatetrace does not run scripts)") from exc
             raise DrawingError(f"{origin} cannot be read by svgelements ({exc!r}); check its lengths (e.g. "
                                "width='10mm'), colours and path data") from exc
     box = document.viewbox if isinstance(document, se.SVG) else None
