@@ -1,7 +1,7 @@
 """Independent jobs side by side: forked worker processes, or one after another.
 
-The planner's programs (each distinct section's warm start, each curve's linked program) and the
-tracer's distinct sections are independent of one another: on a machine with two cores the two
+The planner's programs (each distinct section's warm start, each curve's linked program), the
+tracer's distinct sections and the five plots are independent of one another: on a machine with two cores the two
 halves of such a batch take half the time. IPOPT and MUMPS run on one core each, CasADi's
 functions hold Python's lock, and the tracer's manoeuvres are many short compiled integrations
 called from Python, so the jobs run in processes, not threads.
@@ -25,7 +25,7 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "quiet_on_interrupt", "run_jobs", "worker_count"]
+__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "map_forked", "quiet_on_interrupt", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
 #: hundred MB, so a many-core machine is not filled with them by default.
@@ -106,3 +106,57 @@ def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None
             pass
     for job in jobs[done:]:
         yield fn(job)
+
+
+def _forked_part(fn: Callable, items: list, conn) -> None:
+    """In a forked child: ``fn`` on its share of the items, the results sent back (None on any failure)."""
+    quiet_on_interrupt()
+    try:
+        results = [fn(item) for item in items]
+    except BaseException:  # the parent runs this share again, and reports the error there
+        results = None
+    try:
+        conn.send(results)
+    finally:
+        conn.close()
+
+
+def map_forked(fn: Callable[[J], R], items: Sequence[J], workers: int | None = None) -> list[R]:
+    """``[fn(item) for item in items]``, the items shared out between this process and forked children.
+
+    Unlike :func:`run_jobs`, nothing is pickled on the way in: the children are forks of this
+    process and inherit ``fn`` (a closure will do) and everything it reads; only the results come
+    back pickled. Item ``i`` goes to process ``i % count`` (this one is process 0). A child that fails
+    or dies has its share run here (so an error is raised here, as without children); where forking
+    is not safe, with ``workers=1`` or a single item, everything runs here.
+    """
+    count = worker_count(len(items), workers)
+    if count <= 1 or not _can_fork():
+        return [fn(item) for item in items]
+    context = multiprocessing.get_context("fork")
+    children = []
+    try:
+        for k in range(1, count):
+            receive, send = context.Pipe(duplex=False)
+            child = context.Process(target=_forked_part, args=(fn, list(items[k::count]), send), daemon=True)
+            child.start()
+            send.close()
+            children.append((k, child, receive))
+        results: list = [None] * len(items)
+        results[0::count] = [fn(item) for item in items[0::count]]
+        for k, child, receive in children:
+            try:
+                part = receive.recv()
+            except EOFError:  # the child died before it could answer
+                part = None
+            child.join()
+            if part is None or child.exitcode != 0:
+                part = [fn(item) for item in items[k::count]]
+            results[k::count] = part
+        return results
+    finally:
+        for _, child, receive in children:
+            receive.close()
+            if child.is_alive():  # an interrupt here (or an error) while the child still draws
+                child.terminate()
+                child.join()

@@ -1,0 +1,73 @@
+"""Work shared out between this process and forked children (skatetrace.processes): same answers, nothing lost."""
+
+import os
+
+import pytest
+
+from skatetrace import processes
+
+
+@pytest.fixture
+def forking(monkeypatch):
+    """Forking allowed whatever else runs in the test process."""
+    monkeypatch.setattr(processes, "_can_fork", lambda: True)
+
+
+def test_map_forked_is_the_list_comprehension_in_order(forking):
+    offset = 1000  # a closure: nothing is pickled on the way in
+    parent = os.getpid()
+    out = processes.map_forked(lambda x: (x + offset, os.getpid() == parent), list(range(7)), workers=3)
+    assert [v for v, _ in out] == [x + 1000 for x in range(7)]
+    # item i ran in process i % 3: this one for 0, 3, 6, children for the rest
+    assert [here for _, here in out] == [i % 3 == 0 for i in range(7)]
+
+
+def test_a_share_whose_child_dies_or_fails_is_run_here(forking):
+    parent = os.getpid()
+
+    def dies(x):
+        if os.getpid() != parent and x == 3:
+            os._exit(7)  # a child killed mid-share: its answers never come
+        return 2 * x
+
+    assert processes.map_forked(dies, list(range(6)), workers=2) == [0, 2, 4, 6, 8, 10]
+
+    def fails(x):
+        if os.getpid() != parent:
+            raise RuntimeError("only in the child")
+        return -x
+
+    assert processes.map_forked(fails, list(range(4)), workers=2) == [0, -1, -2, -3]
+
+
+def test_an_error_is_raised_here_as_without_children(forking):
+    def bad(x):
+        if x == 1:
+            raise ValueError("item 1 is bad")
+        return x
+
+    with pytest.raises(ValueError, match="item 1 is bad"):
+        processes.map_forked(bad, [0, 1, 2], workers=2)
+
+
+def test_one_worker_or_no_fork_runs_everything_here(monkeypatch):
+    parent = os.getpid()
+    assert processes.map_forked(lambda x: os.getpid() == parent, [1, 2, 3], workers=1) == [True] * 3
+    monkeypatch.setattr(processes, "_can_fork", lambda: False)
+    assert processes.map_forked(lambda x: os.getpid() == parent, [1, 2, 3], workers=2) == [True] * 3
+
+
+def test_plots_drawn_in_children_are_written_and_recorded_here(forking, tmp_path):
+    """The PNGs come back as bytes and are written by this process, so the output folder's record
+    of what the run wrote (its manifest) holds every plot."""
+    import skatetrace as st
+    from skatetrace.outputs.files import record_writes
+    from skatetrace.outputs.plotting import save_all
+
+    done = st.trace_and_verify(st.pattern("line"))
+    seen = []
+    with record_writes(seen.append):
+        written = save_all(done.trace, done.report, tmp_path)
+    assert [p.name for p in seen] == [p.name for p in written] == ["figure.png", "controls.png", "speed.png",
+                                                                  "mass_path.png", "energies.png"]
+    assert all(p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in written)
