@@ -1,10 +1,10 @@
 """Independent jobs side by side: forked worker processes, or one after another.
 
 The planner's programs (each distinct section's warm start, each curve's linked program), the
-tracer's distinct sections and the five plots are independent of one another: on a machine with two cores the two
-halves of such a batch take half the time. IPOPT and MUMPS run on one core each, CasADi's
-functions hold Python's lock, and the tracer's manoeuvres are many short compiled integrations
-called from Python, so the jobs run in processes, not threads.
+tracer's distinct sections and the five plots are independent of one another: on a machine with two
+cores the two halves of such a batch take half the time. IPOPT and MUMPS run on one core each,
+CasADi's functions hold Python's lock, and the tracer's manoeuvres are many short compiled
+integrations called from Python, so the jobs run in processes, not threads.
 
 Processes are forked (the children share the parent's imported modules and compiled code, so a
 pool costs milliseconds, not the seconds of importing CasADi or loading numba's cache again);

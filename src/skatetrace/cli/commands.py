@@ -67,8 +67,9 @@ def _add_planner_args(t) -> None:
     g.add_argument("--max-accel", type=float,
                    help="largest acceleration of the mass on the ice (figure units per s^2, e.g. m/s^2)")
     g.add_argument("--workers", type=int,
-                   help="processes the planner solves its independent programs in, side by side (default: every "
-                        "core, up to 8; 1: one after another); the plan is the same either way")
+                   help="processes the independent work runs in, side by side: the planner's programs, the "
+                        "tracer's distinct sections (default: every core, up to 8; 1: one after another); the "
+                        "result is the same either way")
 
 
 def _reach(args, unit: str) -> float | None:
