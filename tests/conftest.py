@@ -22,3 +22,21 @@ def pytest_collection_modifyitems(items):
     for item in items:
         if "browser" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.slow)
+
+
+@pytest.fixture
+def pools_made(monkeypatch):
+    """The worker counts of the process pools :mod:`skatetrace.processes` starts, forking allowed
+    whatever else runs in the test process: a test of side-by-side work asserts the pool was used."""
+    from skatetrace import processes
+
+    made = []
+    real = processes.ProcessPoolExecutor
+
+    def spy(*args, **kwargs):
+        made.append(kwargs["max_workers"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(processes, "ProcessPoolExecutor", spy)
+    monkeypatch.setattr(processes, "_can_fork", lambda: True)
+    return made

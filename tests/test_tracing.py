@@ -301,28 +301,19 @@ def test_placement_keys_within_rounding_are_a_tie_kept_by_the_first():
     assert trace_figure(fig, P).sections[0].glide["b"] == 2.5
 
 
-def test_sections_traced_in_worker_processes_are_the_ones_traced_here(monkeypatch):
+def test_sections_traced_in_worker_processes_are_the_ones_traced_here(monkeypatch, pools_made):
     """Four distinct sections (and one repeated) in a pool of two: the same traces, in skating
     order, as one after another; the repeated section is still solved once."""
-    from skatetrace import processes
     from skatetrace.tracing import sections
 
     segs = [Segment(1.0 / r, 1.0 + 0.3 * i) for i, r in enumerate((1.5, 2.0, -2.5, 3.0))]
     pieces = tuple(segs + [segs[0]])
     fig = Figure("five", (Curve(pieces, tuple(Join("cusp") for _ in pieces[1:]), name="five"),))
     here = trace_figure(fig, P, TraceOptions(workers=1))
-    made, progress = [], []
-    real = processes.ProcessPoolExecutor
-
-    def spy(*args, **kwargs):
-        made.append(kwargs["max_workers"])
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(processes, "ProcessPoolExecutor", spy)
-    monkeypatch.setattr(processes, "_can_fork", lambda: True)
+    progress = []
     monkeypatch.setattr(sections, "_POOL_WORTH", 0.0)  # the pool from the second section on
     pooled = trace_figure(fig, P, TraceOptions(workers=2), progress=lambda d, n: progress.append((d, n)))
-    assert made == [2]
+    assert pools_made == [2]
     assert progress == [(i, 5) for i in range(1, 6)]
     assert here.success and pooled.success
     assert pooled.start_times == here.start_times
