@@ -542,7 +542,7 @@ def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dic
     The conditioning is measured as the open loop's (:func:`_conditioning`): the gains scaled by
     ``1 +- PERTURBATION`` and the closed loop replayed again. On a long section with the mass far
     from the blade the closed loop can still amplify round-off to the cusp-speed limit (measured:
-    a phosphor spiral's end speed between 0.4 and 2.3 times its limit under such changes), and
+    a phosphor spiral's end speed between 0.7 and 2.3 times its limit under such changes), and
     then its verdict is no more than one run's digits.
     """
     from ..feedback.closed_loop import replay_law
