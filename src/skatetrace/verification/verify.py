@@ -452,6 +452,28 @@ SPREAD_SHARE = 0.1
 _OPEN_LOOP_KEYS = ("max_deviation_replay_to_figure", "max_deviation_figure_to_replay", "start_speed", "end_speed")
 
 
+def _spreads(params: SleighParams, base: Replay, others: list[Replay], rows: dict[int, np.ndarray]) -> dict:
+    """How far the replays ``others`` stray from ``base`` on each section's ``rows``: ``(position,
+    cusp speed)``, the blade's largest distance (inf where it is not finite) and the largest change of
+    the speed's size at the section's two ends."""
+    out = {si: (0.0, 0.0) for si in rows}
+    _, v0, _ = base.velocities(params)
+    for other in others:
+        _, v1, _ = other.velocities(params)
+        d = np.hypot(*(other.state[3:5] - base.state[3:5]))
+        for si, m in rows.items():
+            far = float(np.max(d[m], initial=0.0)) if np.all(np.isfinite(d[m])) else math.inf
+            ends = m[[0, -1]]
+            speed = float(np.max(np.abs(np.abs(v1[ends]) - np.abs(v0[ends]))))
+            out[si] = (max(out[si][0], far), max(out[si][1], speed))
+    return out
+
+
+def _too_spread(position: float, cusp_speed: float, tol: float, cusp_speed_limit: float) -> bool:
+    """Whether an instrument's spread under ``PERTURBATION`` reaches ``SPREAD_SHARE`` of what it checks."""
+    return bool(position >= SPREAD_SHARE * tol or cusp_speed >= SPREAD_SHARE * cusp_speed_limit)
+
+
 def _conditioning(trace: FigureTrace, schedule: ControlSchedule, rep: Replay, sections, records, tol: float) -> dict:
     """How much the replay of each of ``sections`` moves when the controls move by ``PERTURBATION``.
 
@@ -460,32 +482,22 @@ def _conditioning(trace: FigureTrace, schedule: ControlSchedule, rep: Replay, se
     open-loop check cannot resolve: where it reaches ``SPREAD_SHARE`` of the tolerance (or of the
     cusp-speed limit), the open loop is ill-conditioned for this check.
     """
-    spread_xy = {si: 0.0 for si in sections}
-    spread_v = {si: 0.0 for si in sections}
-    rows = {si: np.flatnonzero(rep.section == si) for si in sections}
-    _, v0, _ = rep.velocities(trace.params)
+    others = []
     for sign in (1.0, -1.0):
         f = 1.0 + sign * PERTURBATION
         other = replay(trace, ControlSchedule(t=schedule.t, a=schedule.a * f, b=schedule.b * f, adot=schedule.adot * f,
                                               bdot=schedule.bdot * f, section=schedule.section, piece=schedule.piece))
         if other.t.shape != rep.t.shape:
             return {si: {"perturbation": PERTURBATION, "ill_conditioned": False} for si in sections}
-        _, v1, _ = other.velocities(trace.params)
-        d = np.hypot(*(other.state[3:5] - rep.state[3:5]))
-        for si, m in rows.items():
-            far = float(np.max(d[m], initial=0.0)) if np.all(np.isfinite(d[m])) else math.inf
-            spread_xy[si] = max(spread_xy[si], far)
-            ends = m[[0, -1]]
-            spread_v[si] = max(spread_v[si], float(np.max(np.abs(np.abs(v1[ends]) - np.abs(v0[ends])))))
+        others.append(other)
+    spreads = _spreads(trace.params, rep, others, {si: np.flatnonzero(rep.section == si) for si in sections})
     size = trace.figure.size()
     out = {}
     for si in sections:
-        r = records[si]
+        xy, v = spreads[si]
         out[si] = {
-            "perturbation": PERTURBATION, "position_spread": spread_xy[si],
-            "amplification": spread_xy[si] / (PERTURBATION * size), "cusp_speed_spread": spread_v[si],
-            "ill_conditioned": bool(spread_xy[si] >= SPREAD_SHARE * tol
-                                    or spread_v[si] >= SPREAD_SHARE * r["cusp_speed_limit"]),
+            "perturbation": PERTURBATION, "position_spread": xy, "amplification": xy / (PERTURBATION * size),
+            "cusp_speed_spread": v, "ill_conditioned": _too_spread(xy, v, tol, records[si]["cusp_speed_limit"]),
         }
     return out
 
@@ -577,17 +589,8 @@ def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dic
             controls[:, m] = np.vstack([z[5:7], rates])
         closed.append(Replay(t=rep.t, state=state, controls=controls, section=rep.section, piece=rep.piece))
     corrections = {si: out[0][2] for si, (m, out) in runs.items()}
-    _, v0, _ = closed[0].velocities(params)
-    spreads = {}
-    for si, (m, _) in runs.items():
-        xy, v = 0.0, 0.0
-        for other in closed[1:]:
-            _, v1, _ = other.velocities(params)
-            d = np.hypot(*(other.state[3:5, m] - closed[0].state[3:5, m]))
-            xy = max(xy, float(np.max(d, initial=0.0)) if np.all(np.isfinite(d)) else math.inf)
-            ends = m[[0, -1]]
-            v = max(v, float(np.max(np.abs(np.abs(v1[ends]) - np.abs(v0[ends])))))
-        spreads[si] = {"perturbation": PERTURBATION, "position_spread": xy, "cusp_speed_spread": v}
+    spreads = {si: {"perturbation": PERTURBATION, "position_spread": xy, "cusp_speed_spread": v}
+               for si, (xy, v) in _spreads(params, closed[0], closed[1:], {si: m for si, (m, _) in runs.items()}).items()}
     return closed[0], corrections, spreads
 
 
@@ -639,9 +642,8 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
                 record["max_correction"] = corrections[si]
                 record["instrument"] = "closed loop"
                 spread = spreads[si]
-                spread["ill_conditioned"] = bool(spread["position_spread"] >= SPREAD_SHARE * tol
-                                                 or spread["cusp_speed_spread"]
-                                                 >= SPREAD_SHARE * record["cusp_speed_limit"])
+                spread["ill_conditioned"] = _too_spread(spread["position_spread"], spread["cusp_speed_spread"], tol,
+                                                        record["cusp_speed_limit"])
                 record["closed_loop_conditioning"] = spread
                 # the closed loop stands for the schedule only if the law barely departed from it,
                 # and only if its own verdict is more than round-off
