@@ -38,5 +38,5 @@ def pools_made(monkeypatch):
         return real(*args, **kwargs)
 
     monkeypatch.setattr(processes, "ProcessPoolExecutor", spy)
-    monkeypatch.setattr(processes, "_can_fork", lambda: True)
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
     return made

@@ -68,7 +68,7 @@ class _BrokenPool:
 
 def test_a_pool_that_breaks_loses_nothing(jobs, serial, monkeypatch):
     monkeypatch.setattr(processes, "ProcessPoolExecutor", _BrokenPool)
-    monkeypatch.setattr(processes, "_can_fork", lambda: True)
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
     again = pool.solve_programs(jobs, workers=2)
     assert len(again) == len(jobs)
     for a, b in zip(serial, again):
@@ -122,7 +122,7 @@ def test_the_default_never_fills_a_many_core_machine(jobs, serial, monkeypatch):
 
     monkeypatch.setattr(processes, "available_workers", lambda: 64)
     monkeypatch.setattr(processes, "ProcessPoolExecutor", Spy)
-    monkeypatch.setattr(processes, "_can_fork", lambda: True)
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
     many = [jobs[i % len(jobs)] for i in range(pool.DEFAULT_MAX_WORKERS + 1)]
     again = pool.solve_programs(many)  # the spy's pool loses every answer: solved here instead
     assert made == [pool.DEFAULT_MAX_WORKERS]

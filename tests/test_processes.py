@@ -10,7 +10,7 @@ from skatetrace import processes
 @pytest.fixture
 def forking(monkeypatch):
     """Forking allowed whatever else runs in the test process."""
-    monkeypatch.setattr(processes, "_can_fork", lambda: True)
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
 
 
 def test_map_forked_is_the_list_comprehension_in_order(forking):
@@ -53,7 +53,7 @@ def test_an_error_is_raised_here_as_without_children(forking):
 def test_one_worker_or_no_fork_runs_everything_here(monkeypatch):
     parent = os.getpid()
     assert processes.map_forked(lambda x: os.getpid() == parent, [1, 2, 3], workers=1) == [True] * 3
-    monkeypatch.setattr(processes, "_can_fork", lambda: False)
+    monkeypatch.setattr(processes, "can_fork", lambda: False)
     assert processes.map_forked(lambda x: os.getpid() == parent, [1, 2, 3], workers=2) == [True] * 3
 
 

@@ -80,10 +80,10 @@ def _end_to_end(name: str) -> tuple[str, bool, str]:
 
 @pytest.fixture(scope="module")
 def traced():
-    from skatetrace.processes import _can_fork, available_workers
+    from skatetrace.processes import can_fork, available_workers
 
     workers = min(2, available_workers())
-    if workers > 1 and _can_fork():
+    if workers > 1 and can_fork():
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
             return {name: (ok, why) for name, ok, why in pool.map(_end_to_end, FILES)}
     return {name: (ok, why) for name, ok, why in map(_end_to_end, FILES)}

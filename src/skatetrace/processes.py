@@ -25,7 +25,8 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "map_forked", "quiet_on_interrupt", "run_jobs", "worker_count"]
+__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "can_fork", "map_forked", "quiet_on_interrupt", "run_jobs",
+           "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
 #: hundred MB, so a many-core machine is not filled with them by default.
@@ -49,7 +50,9 @@ def worker_count(jobs: int, workers: int | None) -> int:
     return min(jobs, min(available_workers(), DEFAULT_MAX_WORKERS) if workers is None else int(workers))
 
 
-def _can_fork() -> bool:
+def can_fork() -> bool:
+    """Whether this process may fork: the platform has ``fork`` and no other thread runs (a fork
+    copies only the calling thread, and would leave another's locks held in the child)."""
     return "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
 
 
@@ -86,7 +89,7 @@ def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None
     """
     count = worker_count(len(jobs), workers)
     done = 0
-    if count > 1 and _can_fork():
+    if count > 1 and can_fork():
         try:
             with ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("fork"),
                                      initializer=quiet_on_interrupt) as pool:
@@ -131,7 +134,7 @@ def map_forked(fn: Callable[[J], R], items: Sequence[J], workers: int | None = N
     is not safe, with ``workers=1`` or a single item, everything runs here.
     """
     count = worker_count(len(items), workers)
-    if count <= 1 or not _can_fork():
+    if count <= 1 or not can_fork():
         return [fn(item) for item in items]
     context = multiprocessing.get_context("fork")
     children = []

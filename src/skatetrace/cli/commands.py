@@ -316,21 +316,17 @@ def _compiling():
 
     said = []
 
-    def say(part: str, seconds: float | None) -> None:
+    def say(line: str) -> None:
         if not said:
             said.append(True)
             print("skatetrace: first run on this machine: compiling the numerical core, the parts this run needs, "
                   "once (later runs load them)", file=sys.stderr, flush=True)
-        if part == "ahead":
-            print("  compiling the verification's parts alongside, in a second process", file=sys.stderr, flush=True)
-        elif seconds is None:
-            print(f"  compiling {part}", file=sys.stderr, flush=True)
-        else:
-            print(f"  compiled {part} in {seconds:.0f} s", file=sys.stderr, flush=True)
+        print(line, file=sys.stderr, flush=True)
 
     if compile_ahead() is not None:  # a first run: the verification compiles while the run traces
-        say("ahead", None)
-    with reporting(say):
+        say("  compiling the verification's parts alongside, in a second process")
+    with reporting(lambda part, seconds: say(f"  compiling {part}" if seconds is None
+                                             else f"  compiled {part} in {seconds:.0f} s")):
         yield
 
 

@@ -172,11 +172,12 @@ def compile_ahead(parts: tuple[str, ...] = tuple(_EXERCISES)):
     finished compiling when the run needs it is compiled by the run as usual.
     """
     import multiprocessing
-    import threading
 
     from numba.core.config import DISABLE_JIT
 
-    if DISABLE_JIT or "fork" not in multiprocessing.get_all_start_methods() or threading.active_count() > 1:
+    from ..processes import can_fork
+
+    if DISABLE_JIT or not can_fork():
         return None
     try:
         todo = tuple(p for p in parts if not _part_is_cached(p))
