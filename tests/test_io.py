@@ -38,6 +38,31 @@ def test_result_records_every_tracer_setting():
     assert d["options"] == asdict(options)
 
 
+@pytest.mark.parametrize("n", [0, 1, 7, 1001])
+def test_controls_csv_formatted_in_two_processes_is_the_same_text_and_reads_back_exactly(tmp_path, monkeypatch,
+                                                                                          pools_made, n):
+    import numpy as np
+
+    from skatetrace.dynamics.controls import ControlSchedule
+    from skatetrace.outputs import results
+
+    rng = np.random.default_rng(n)
+    schedule = ControlSchedule(t=np.sort(rng.random(n)), a=rng.normal(size=n), b=rng.normal(size=n) * 1e-300,
+                               adot=rng.normal(size=n) * 1e300, bdot=-rng.random(n), section=np.arange(n) % 3,
+                               piece=np.arange(n) % 2)
+    states = {k: rng.normal(size=n) for k in ("x", "y", "theta", "p1", "p2", "xi1", "xi2")}
+    monkeypatch.setattr(results, "_SPLIT_ROWS", 10**9)
+    whole = results._csv_text(schedule, states, [0, 1, 1])
+    monkeypatch.setattr(results, "_SPLIT_ROWS", 2)
+    halves = results._csv_text(schedule, states, [0, 1, 1])
+    assert halves == whole and whole.count("\n") == n + 1
+    (tmp_path / "controls.csv").write_text(halves)
+    back = results.read_controls(tmp_path / "controls.csv")
+    for k in ("t", "a", "b", "adot", "bdot"):
+        np.testing.assert_array_equal(back[k], getattr(schedule, k))
+    np.testing.assert_array_equal(back["curve"], np.array([0, 1, 1])[schedule.section])
+
+
 # ---------------------------------------------------------------------------------------------------------
 # strict JSON, file modes, output folders
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..dynamics.controls import ControlSchedule
 from ..errors import SkatetraceError
+from ..processes import map_forked
 from ..tracing.sections import FigureTrace
 from ..verification.feasibility import Feasibility
 from ..verification.verify import VerificationReport
@@ -85,19 +86,32 @@ def result_dict(trace: FigureTrace) -> dict[str, Any]:
     })
 
 
+#: Rows of ``controls.csv`` from which its text is formatted in two processes (a planned school
+#: figure has 400,000 rows: 2.8 s of ``repr`` in one).
+_SPLIT_ROWS = 50_000
+
+
 def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray], curve_of_section) -> str:
     """``controls.csv``: floats as their shortest round-trip ``repr``, one column at a time.
 
     ``piece`` counts within a curve, so each row also names its ``curve`` (``curve_of_section``:
-    the curve of every section) and ``section`` (in skating order over the figure).
+    the curve of every section) and ``section`` (in skating order over the figure). Long files are
+    formatted in halves side by side (:func:`~skatetrace.processes.map_forked`): the same text.
     """
     section = np.asarray(schedule.section, dtype=int)
     curve = np.asarray(curve_of_section, dtype=int)[section] if section.size else section
     cols = {"piece": schedule.piece, "t": schedule.t, "a": schedule.a, "b": schedule.b,
             "adot": schedule.adot, "bdot": schedule.bdot, **states, "curve": curve, "section": section}
-    text = [list(map(str, np.asarray(cols[k], dtype=int).tolist())) if k in _INT_COLUMNS
-            else list(map(repr, np.asarray(cols[k], dtype=float).tolist())) for k in CSV_COLUMNS]
-    return "\n".join([",".join(CSV_COLUMNS), *map(",".join, zip(*text))]) + "\n"
+    arrays = [np.asarray(cols[k], dtype=int if k in _INT_COLUMNS else float) for k in CSV_COLUMNS]
+    n = int(section.size)
+
+    def rows(bounds: tuple[int, int]) -> str:
+        lo, hi = bounds
+        text = [list(map(str if a.dtype.kind == "i" else repr, a[lo:hi].tolist())) for a in arrays]
+        return "".join(line + "\n" for line in map(",".join, zip(*text)))
+
+    halves = [(0, n // 2), (n // 2, n)] if n >= _SPLIT_ROWS else [(0, n)]
+    return ",".join(CSV_COLUMNS) + "\n" + "".join(map_forked(rows, halves))
 
 
 def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,

@@ -27,6 +27,8 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sps
 
+from .native import native
+
 __all__ = ["SparseProgram", "ProgramResult"]
 
 
@@ -366,7 +368,7 @@ def _local_derivatives(fn: ca.Function, shape: tuple) -> _Local:
     fj, jac_pattern = nonzeros("block_jacobian", J, [z, *params])
     fg, (grad_rows, _cols) = nonzeros("block_gradient", grad, [z, *params])
     fh, pattern = nonzeros("block_hessian", H, [z, *params, sigma, *lams])
-    return _Local(fj, jac_pattern, fg, grad_rows, fh, pattern)
+    return _Local(native(fj), jac_pattern, native(fg), grad_rows, native(fh), pattern)
 
 
 def _is_zero(expr) -> bool:

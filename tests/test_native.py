@@ -1,0 +1,112 @@
+"""Compiled CasADi functions: the same numbers as CasADi's virtual machine, cached, and never a failure."""
+
+import subprocess
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import skatetrace as st
+from skatetrace.figures.figure import figure_from_dict
+from skatetrace.planning import native as nat
+from skatetrace.planning.planner import plan_figure
+
+needs_cc = pytest.mark.skipif(nat.compiler() is None, reason="no C compiler on this machine")
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("SKATETRACE_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("SKATETRACE_NATIVE", raising=False)
+    return tmp_path
+
+
+def _function(scale=1.0):
+    x = ca.SX.sym("x", 3)
+    p = ca.SX.sym("p", 2)
+    y = ca.vertcat(ca.sin(x[0] * p[0]) / (1 + x[1] ** 2), ca.sqrt(x[2] ** 2 + p[1]) * scale, x[0] * x[1] * x[2])
+    return ca.Function("f", [x, p], [y, ca.jacobian(y, x)])
+
+
+def _inputs(fn, rng, n=20):
+    return [rng.uniform(0.5, 2.0, (fn.size1_in(i), n)) for i in range(fn.n_in())]
+
+
+@needs_cc
+def test_the_compiled_function_gives_the_interpreted_numbers(cache):
+    fn = _function()
+    compiled = nat.native(fn)
+    assert compiled is not fn and not compiled.is_a("SXFunction")
+    assert len(list(cache.rglob("st_*.so"))) == 1
+    args = _inputs(fn, np.random.default_rng(0))
+    for want, got in zip(fn.map(20)(*args), compiled.map(20)(*args)):
+        np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-14, atol=0)
+    assert compiled.name_in() == fn.name_in() and compiled.sparsity_out(1) == fn.sparsity_out(1)
+
+
+@needs_cc
+def test_a_cached_function_is_loaded_without_the_compiler(cache, monkeypatch):
+    first = nat.native(_function())
+
+    def no_compiler(*a, **k):
+        raise AssertionError("compiled again")
+    monkeypatch.setattr(subprocess, "run", no_compiler)
+    again = nat.native(_function())  # built anew: the same function, the same key
+    assert not again.is_a("SXFunction")
+    args = _inputs(first, np.random.default_rng(1), 1)
+    np.testing.assert_array_equal(np.asarray(again(*args)[0]), np.asarray(first(*args)[0]))
+    assert len(list(cache.rglob("st_*.so"))) == 1
+
+
+@pytest.mark.parametrize("setting", ["no compiler", "compiler fails", "turned off", "unwritable cache"])
+def test_where_compiling_cannot_be_done_the_function_is_returned_as_it_was(cache, monkeypatch, setting, tmp_path):
+    if setting == "no compiler":
+        monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    elif setting == "compiler fails":
+        monkeypatch.setenv("CC", "false")
+    elif setting == "turned off":
+        monkeypatch.setenv("SKATETRACE_NATIVE", "0")
+    else:
+        blocker = tmp_path / "a-file"
+        blocker.write_text("")
+        monkeypatch.setenv("SKATETRACE_CACHE_DIR", str(blocker / "cache"))
+    fn = _function()
+    assert nat.native(fn) is fn
+    assert not list(tmp_path.rglob("*.so"))
+
+
+def test_an_mx_function_is_returned_as_it_was(cache):
+    x = ca.MX.sym("x", 2)
+    fn = ca.Function("g", [x], [2 * x])
+    assert nat.native(fn) is fn
+
+
+def test_the_cache_lives_under_the_directory_asked_for(cache):
+    assert nat.cache_dir().parent == cache
+    assert ca.__version__ in nat.cache_dir().name
+
+
+def _plan_arc(monkeypatch, on: bool, params=None):
+    monkeypatch.setenv("SKATETRACE_NATIVE", "1" if on else "0")
+    fig = figure_from_dict({"schema": "skatetrace.figure/1",
+                            "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 198}]}]})
+    return plan_figure(fig, params, options=st.TraceOptions(reach=1.0))
+
+
+@needs_cc
+def test_a_plan_is_the_same_compiled_or_interpreted(cache, monkeypatch):
+    plain = _plan_arc(monkeypatch, False)
+    assert not list(cache.rglob("*.so"))
+    fast = _plan_arc(monkeypatch, True)
+    libraries = sorted(p.name for p in cache.rglob("*.so"))
+    assert len(libraries) == 3  # the blocks' Jacobian, gradient and Hessian
+    for trace in (plain, fast):
+        assert trace.success, trace.message
+        assert trace.sections[0].metrics["reach"] <= 1.0
+    # IPOPT solves the same program with the same numbers: the same optimum, to its tolerance
+    a, b = plain.sections[0], fast.sections[0]
+    assert b.duration == pytest.approx(a.duration, rel=1e-6)
+    assert b.metrics["reach"] == pytest.approx(a.metrics["reach"], rel=1e-6)
+    # planned again: loaded from the cache, nothing new compiled
+    _plan_arc(monkeypatch, True)
+    assert sorted(p.name for p in cache.rglob("*.so")) == libraries
