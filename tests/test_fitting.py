@@ -21,7 +21,7 @@ from skatetrace.drawings.curves import BezierPiece, EllipticArcPiece, FunctionPi
 from skatetrace.errors import FitError, SkatetraceError
 from skatetrace.drawings.fit_results import FitStatus, PathFit
 from skatetrace.drawings.fitting import fit_path
-from skatetrace.drawings.splitting import CUSP_RADIUS
+from skatetrace.drawings.splitting import TIP_RADIUS, _cusps
 from skatetrace.drawings.to_figure import figure_from_fit
 from skatetrace.figures.geometry import advance, distance_to_segment
 
@@ -57,9 +57,11 @@ def check_structure(path, fit, *, heading_tol=1e-9):
                 continue
             d1, d2 = piece.d1(knot.t)[:, 0], piece.d2(knot.t)[:, 0]
             speed, bend = math.hypot(*d1), math.hypot(*d2)
-            if bend > 1e-7 * piece_length(piece) and speed ** 2 <= CUSP_RADIUS * size * bend:
+            cusps = _cusps(piece, size, TIP_RADIUS * fit.tol)
+            if bend > 1e-7 * piece_length(piece) and any(abs(knot.t - c) <= 1e-9 for c in cusps):
                 # The splitter's cusp (a turn of radius below rounding, e.g. a hook of 1e-11 at the
-                # start): the heading is the limit direction, +-r'', not r' (which turns there).
+                # start, or a hairpin tighter than the tolerance): the heading is the limit
+                # direction, +-r'', not r' (which turns there).
                 h = math.atan2(d2[1], d2[0])
                 assert min(heading_gap(p.heading, h), heading_gap(p.heading, h + math.pi)) <= heading_tol
             elif speed > 1e-6 * piece_length(piece):
@@ -265,6 +267,7 @@ def test_random_beziers_min_count(pts):
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.floats(-1, 1), min_size=6, max_size=6), st.lists(st.floats(0, 6.3), min_size=6, max_size=6),
        st.booleans(), st.floats(1.0, 6.0))
+@example([1.0, 0.0, 0.0, 0.0, 0.25, 0.4375], [0.0, 0.0, 0.0, 0.0, 0.0, 4.25], False, 2.0)  # a hairpin tip: a cusp
 def test_random_sums_of_sinusoids(amp, phase, analytic, span):
     def fn(u):
         x = sum(amp[i] * np.cos((i + 1) * u + phase[i]) for i in range(3))

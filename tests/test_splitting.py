@@ -82,3 +82,41 @@ def test_closed_path_closure():
     assert [[s.piece for s in r.spans] for r in runs] == [[2], [3, 0, 1]]
     assert [r.corner for r in runs] == pytest.approx([math.pi / 2, math.pi / 2])
     assert [s.kind for s in runs[1].spans] == ["line", "arc", "line"]
+
+
+def _hairpin(h):
+    """A quadratic out and back whose tip, at (1, 0), has radius h^2 / 2 (and turns by nearly pi)."""
+    return Path((BezierPiece(((0.0, -h), (2.0, 0.0), (0.0, h))),))
+
+
+@pytest.mark.parametrize("fit", ["arcs", "exact"])
+def test_a_hairpin_tighter_than_the_tolerance_is_a_cusp(fit):
+    from skatetrace.drawings.exact import fit_exact_path
+    from skatetrace.drawings.fitting import fit_path
+
+    fitter = fit_path if fit == "arcs" else fit_exact_path
+    path = _hairpin(1e-3)  # tip radius 5e-7 on a path of size 1
+    assert len(split_path(path)) == 1  # without a tolerance: smooth (the radius is far above rounding)
+    res = fitter(path, 1e-3)
+    assert res.success, res.message
+    assert len(res.runs) == 2 and abs(res.runs[1].corner) == pytest.approx(math.pi, abs=1e-3)
+    assert (res.hausdorff if fit == "arcs" else res.deviation) <= 1e-3
+    # where the tolerance is finer than the tip (radius above tol / 8), it stays one smooth run
+    res = fit_path(_hairpin(0.05), 1e-4)  # radius 1.25e-3
+    assert res.success and len(res.runs) == 1
+
+
+def test_a_tight_turn_that_does_not_come_back_is_not_a_cusp():
+    from skatetrace.drawings.fitting import fit_path
+    from skatetrace.drawings.splitting import _turn_across
+
+    # A quadratic hairpin turns by nearly pi across its tip; a quarter turn of a circle by a
+    # quarter: only the first is made a cusp whatever its radius.
+    pin = _hairpin(1e-3).pieces[0]
+    assert math.degrees(_turn_across(pin, 0.5, 1e-3)) > 170
+    quarter = EllipticArcPiece((0.0, 0.0), 1e-4, 1e-4, 0.0, 0.0, math.pi / 2)
+    assert math.degrees(_turn_across(quarter, 0.5, 1.0)) == pytest.approx(90.0, abs=1e-6)
+    bend = Path((LinePiece((-1.0, 0.0), (0.0, 0.0)), BezierPiece(((0.0, 0.0), (1e-5, 0.0), (1e-5, 1e-5))),
+                 LinePiece((1e-5, 1e-5), (1e-5, 1.0))))
+    res = fit_path(bend, 1e-3)
+    assert res.success and all(abs(r.corner or 0.0) < 3.0 for r in res.runs)

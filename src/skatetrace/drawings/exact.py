@@ -120,7 +120,7 @@ def fit_exact_path(path: Path, tol: float, *, corner_tol_deg: float = 0.5,
     if isinstance(max_pieces, bool) or not isinstance(max_pieces, (int, np.integer)) or max_pieces < 1:
         raise FitError(f"max_pieces must be a whole number >= 1, got {max_pieces!r}")
     try:
-        runs, prep = _split(path, corner_tol_deg)
+        runs, prep = _split(path, corner_tol_deg, tol)
         with np.errstate(all="ignore"):
             return _fit_runs(path, runs, prep.scale, tol, int(max_pieces))
     except ArithmeticError as exc:  # overflow in a user's piece, say; never a wrong answer

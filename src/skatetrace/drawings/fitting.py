@@ -486,7 +486,7 @@ def fit_path(path: Path, tol: float, *, method: str = "greedy", corner_tol_deg: 
     tol = _check_tol(tol)
     method = _check_method(method)
     try:
-        runs, prep = _split(path, corner_tol_deg)
+        runs, prep = _split(path, corner_tol_deg, tol)
         return _fit_runs(path, runs, prep.scale, tol, method)
     except ArithmeticError as exc:  # overflow in a user's piece, say; never a wrong answer
         raise FitError(f"path {path.name!r}: numerical failure while fitting ({exc})") from exc

@@ -31,6 +31,13 @@ __all__ = ["Run", "split_path"]
 TINY = 1e-10  # a piece, or the bit of a piece before a cusp, shorter than this is rounding: dropped
 GAP = 1e-9  # consecutive pieces must meet within this
 CUSP_RADIUS = 1e-10  # a speed minimum whose radius bound |r'|^2/|r''| is below this is a cusp
+# Relative to the fit's tolerance: a speed minimum whose radius bound is below TIP_RADIUS times
+# the tolerance, where the curve comes back within TIP_TURN_DEG of the way it went (over the
+# stretch within TIP_REACH tolerances of the tip), is a cusp too: a hairpin too tight to skate,
+# whose rounding lies within the tolerance.
+TIP_RADIUS = 1 / 8
+TIP_REACH = 1.0
+TIP_TURN_DEG = 150.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,8 +112,45 @@ def _direction(piece: Piece, t: float, side: int, vscale: float, cusp: bool = Fa
     return None
 
 
-def _cusps(piece: Piece, scale: float) -> list[float]:
-    """Parameters in ``[0, 1]`` where the speed ``|r'|`` vanishes (to within rounding of the size)."""
+def _turn_across(piece: Piece, t: float, reach: float) -> float:
+    """The angle (radians) between the unit tangents where the curve leaves the ball of radius ``reach`` around ``r(t)``.
+
+    On each side the parameter where the distance from ``r(t)`` first reaches ``reach`` (bisected
+    on a grid), or the piece's end if it stays inside.
+    """
+    p = _col(piece, "point", t)
+    dirs = []
+    for side in (-1, 1):
+        grid = np.linspace(t, 0.0 if side < 0 else 1.0, 257)
+        xy = np.asarray(piece.point(grid), dtype=float)
+        d = np.hypot(xy[0] - p[0], xy[1] - p[1])
+        out = np.flatnonzero(d >= reach)
+        if out.size:
+            lo, hi = grid[out[0] - 1], grid[out[0]]
+            for _ in range(40):
+                mid = 0.5 * (lo + hi)
+                q = _col(piece, "point", mid)
+                if math.hypot(q[0] - p[0], q[1] - p[1]) >= reach:
+                    hi = mid
+                else:
+                    lo = mid
+            u = hi
+        else:
+            u = grid[-1]
+        v = _col(piece, "d1", u)
+        n = math.hypot(v[0], v[1])
+        if not n > 0:
+            return 0.0
+        dirs.append(v / n)
+    return math.acos(max(-1.0, min(1.0, float(dirs[0] @ dirs[1]))))
+
+
+def _cusps(piece: Piece, scale: float, tip: float = 0.0) -> list[float]:
+    """Parameters in ``[0, 1]`` where the speed ``|r'|`` vanishes (to within rounding of the size).
+
+    With ``tip > 0`` (a length), also the tips of hairpins whose radius bound is at most ``tip``
+    (see :data:`TIP_RADIUS`).
+    """
     if isinstance(piece, LinePiece):
         return []
     t = np.linspace(0.0, 1.0, 1025)
@@ -117,7 +161,10 @@ def _cusps(piece: Piece, scale: float) -> list[float]:
         return []
     left = np.concatenate([[np.inf], sp[:-1]])
     right = np.concatenate([sp[1:], [np.inf]])
-    cand = np.nonzero((sp <= left) & (sp <= right) & (sp < 1e-2 * top))[0]
+    with np.errstate(all="ignore"):
+        d2 = piece.d2(t)
+        tight = sp * sp <= tip * np.hypot(d2[0], d2[1])
+    cand = np.nonzero((sp <= left) & (sp <= right) & ((sp < 1e-2 * top) | tight))[0]
     out: list[float] = []
 
     def speed(x: float) -> float:
@@ -130,9 +177,11 @@ def _cusps(piece: Piece, scale: float) -> list[float]:
         ts, s = (float(res.x), float(res.fun)) if res.fun <= sp[i] else (float(t[i]), float(sp[i]))
         d2 = _col(piece, "d2", ts)
         n2 = math.hypot(d2[0], d2[1])
-        if s == 0.0 or (n2 > 0 and s * s <= CUSP_RADIUS * scale * n2):
-            if not out or ts - out[-1] > 1e-9:
-                out.append(ts)
+        cusp = s == 0.0 or (n2 > 0 and s * s <= CUSP_RADIUS * scale * n2)
+        if not cusp and n2 > 0 and s * s <= tip * n2:
+            cusp = _turn_across(piece, ts, tip / TIP_RADIUS * TIP_REACH) >= math.radians(TIP_TURN_DEG)
+        if cusp and (not out or ts - out[-1] > 1e-9):
+            out.append(ts)
     return out
 
 
@@ -176,13 +225,13 @@ class _Range(NamedTuple):
     cusp_b: bool
 
 
-def _ranges(path: Path, prep: _Prepared) -> list[_Range]:
-    """Pieces cut at their cusps, with pieces and bits of pieces below rounding dropped."""
+def _ranges(path: Path, prep: _Prepared, tip: float = 0.0) -> list[_Range]:
+    """Pieces cut at their cusps (and hairpin tips tighter than ``tip``), with pieces and bits of pieces below rounding dropped."""
     out = []
     for i, p in enumerate(path.pieces):
         if prep.lengths[i] <= TINY * prep.scale:
             continue
-        cuts = [0.0, *(c for c in _cusps(p, prep.scale) if 0.0 < c < 1.0), 1.0]
+        cuts = [0.0, *(c for c in _cusps(p, prep.scale, tip) if 0.0 < c < 1.0), 1.0]
         parts = []
         for a, b in zip(cuts[:-1], cuts[1:]):
             if b > a and piece_length(p, a, b, 32) > TINY * prep.scale:
@@ -194,13 +243,14 @@ def _ranges(path: Path, prep: _Prepared) -> list[_Range]:
     return out
 
 
-def _split(path: Path, corner_tol_deg: float) -> tuple[list[Run], _Prepared]:
+def _split(path: Path, corner_tol_deg: float, tol: float = 0.0) -> tuple[list[Run], _Prepared]:
+    """:func:`split_path`, and the path's size; ``tol`` (the fit's tolerance) makes hairpins tighter than it cusps."""
     if not (isinstance(corner_tol_deg, (int, float)) and math.isfinite(corner_tol_deg)
             and 0 <= corner_tol_deg < 180):
         raise FitError(f"corner_tol_deg must be in [0, 180) degrees, got {corner_tol_deg!r}")
     prep = _prepare(path)
     scale, pieces = prep.scale, path.pieces
-    ranges = _ranges(path, prep)
+    ranges = _ranges(path, prep, TIP_RADIUS * tol)
     n = len(ranges)
     dirs_in, dirs_out = [], []
     for r in ranges:
@@ -284,7 +334,8 @@ def split_path(path: Path, *, corner_tol_deg: float = 0.5) -> list[Run]:
     local minima of ``|r'|`` on a 1025-point grid refined by bounded Brent minimisation; a minimum is a
     cusp when ``|r'|^2 / |r''|`` (a lower bound of the radius of curvature there) is below
     ``CUSP_RADIUS`` times the size. Its two sides have limit directions ``-r''`` and ``+r''``, so a true
-    cusp turns by about ``pi``. Spiral spans: sign changes of kappa and of its grid differences on 513
+    cusp turns by about ``pi``. The fitters (not this function, which has no tolerance) also cut
+    hairpin tips tighter than their tolerance (:data:`TIP_RADIUS`, :data:`TIP_TURN_DEG`). Spiral spans: sign changes of kappa and of its grid differences on 513
     points per stretch, ignoring values within their rounding error (see
     :func:`~skatetrace.drawings.spirals._spiral_spans`), refined by brentq (on kappa, and on a central
     difference of kappa, with a bounded minimisation of kappa as fall-back); splits within
