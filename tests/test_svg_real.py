@@ -102,6 +102,20 @@ def test_a_style_sheet_hides_a_class_and_paints_another():
     assert any("paint nothing" in n and "'frame'" in n for n in drawing.notes)
 
 
+def test_style_rules_that_are_not_applied_are_named():
+    drawing = read_svg(svg('<style>/* g x {} */ g.off path { display: none } .frame > rect, a[href] {fill: none}'
+                           ' .hidden, path, #id, *, path.ink { stroke: black } @media print { path { stroke: red } }'
+                           '</style><g class="off"><path id="p" d="M 0 0 L 10 0"/></g>'))
+    assert [p.name for p in drawing.paths] == ["p"]  # read as if the rule were absent, and said so
+    [note] = [n for n in drawing.notes if "not applied" in n]
+    for selector in ("'g.off path'", "'.frame > rect'", "'a[href]'"):
+        assert selector in note
+    for applied in ("'.hidden'", "'path'", "'#id'", "'*'", "'path.ink'", "@media", "g x"):
+        assert applied not in note
+    plain = read_svg(svg('<style>.a { stroke: black } path { fill: none }</style><path id="p" d="M 0 0 L 10 0"/>'))
+    assert not any("not applied" in n for n in plain.notes)
+
+
 def test_a_tabler_style_icon_skips_its_bounding_rect():
     icon = ('<svg xmlns="http://www.w3.org/2000/svg" width="24" height="24" viewBox="0 0 24 24" fill="none" '
             'stroke="currentColor" stroke-width="2" stroke-linecap="round" stroke-linejoin="round">'

@@ -61,7 +61,7 @@ from .files import file_stem, read_bytes, shorten
 from .lengths import CLOSE_TOL, MAX_COORD, extent
 from .svg_entities import inline_entities
 from .svg_style import (MAX_ELEMENTS, SHAPE_TAGS, Placed, Visibility, check_transforms, expand, local_tag,
-                        styled_names, visibility)
+                        styled_names, unapplied_rules, visibility)
 from ..errors import DrawingError
 
 __all__ = ["read_svg", "parse_path_string", "SVG_SUFFIXES", "MAX_ELEMENTS"]
@@ -113,14 +113,13 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     inside the root, ``<g>``, ``<a>``, ``<switch>`` (its first child without conditions), nested ``<svg>`` viewports
     and ``<use>`` clones (of shapes, groups, ``<symbol>``, other ``<use>``), with every ``transform``, ``x``/``y`` and
     viewport on the way. Lengths in units are user units at 96 per inch. ``<defs>``, ``<symbol>``, ``<marker>``,
-    ``<mask>``, ``<clipPath>`` and ``<pattern>`` are never drawn by themselves. CSS from ``<style>`` sheets (simple
-    selectors: ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``; not descendant or attribute selectors, nor rules
-    after the element they would style) and ``style`` attributes are applied. Elements hidden by ``display:none`` or
-    ``visibility:hidden`` (on them or inherited) are skipped, and so are elements that paint nothing (fill and stroke
-    ``none``: the invisible frames of icon sets) where anything else is painted; ``notes`` lists what was skipped. A
-    CSS ``transform`` applies like the attribute (without ``transform-origin``). Not read: text, images, clip paths
-    and masks (the full shape is read), markers, external ``href`` (``other.svg#id``). An SVG without the SVG
-    namespace declaration is read as if it had one.
+    ``<mask>``, ``<clipPath>`` and ``<pattern>`` are never drawn by themselves. CSS from ``<style>`` sheets (selectors
+    ``*``, ``tag``, ``#id``, ``.class``, ``tag.class``; others are named in ``notes``) and ``style`` attributes apply.
+    Elements hidden by ``display:none`` or ``visibility:hidden`` (on them or inherited) are skipped, and so are
+    elements that paint nothing (fill and stroke ``none``: the invisible frames of icon sets) where anything else is
+    painted; ``notes`` lists what was skipped. A CSS ``transform`` applies like the attribute (without
+    ``transform-origin``). Not read: text, images, clip paths and masks (the full shape is read), markers, external
+    ``href`` (``other.svg#id``). An SVG without the SVG namespace declaration is read as if it had one.
 
     Examples
     --------
@@ -383,6 +382,7 @@ def _page_notes(root: ET.Element):
     if page:
         described = ", ".join(f"{key}={value!r}" for key, value in page.items())
         yield f"coordinates are SVG user units (page {described}), y flipped to point up"
+    yield from unapplied_rules(root)
 
 
 # --- transforms --------------------------------------------------------------------------------------

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from ..errors import DrawingError
 
 __all__ = ["Visibility", "visibility", "Placed", "expand", "check_transforms", "local_tag", "styled_names",
-           "SHAPE_TAGS", "MAX_ELEMENTS"]
+           "unapplied_rules", "SHAPE_TAGS", "MAX_ELEMENTS"]
 
 SHAPE_TAGS = ("path", "rect", "circle", "ellipse", "line", "polyline", "polygon")
 """The SVG elements read as geometry."""
@@ -51,6 +51,10 @@ _ONE_TRANSFORM = re.compile(r"\s*([A-Za-z]+)\s*\(([^()]*)\)\s*,?")
 _ARGUMENT = re.compile(rf"\s*{_NUMBER}\s*,?")  # one at a time: a repeated group backtracks exponentially
 _ARGUMENTS = {"matrix": (6,), "translate": (1, 2), "scale": (1, 2), "rotate": (1, 3), "skewX": (1,), "skewY": (1,)}
 _CSS_BLOCK = re.compile(r"\{([^}]*)\}")
+_CSS_RULE = re.compile(r"([^{}]*)\{[^}]*\}")
+_CSS_COMMENT = re.compile(r"/\*.*?\*/", re.S)
+# The selectors svgelements applies: *, tag, #id, .class, tag.class (one element, no combinator).
+_SIMPLE_SELECTOR = re.compile(r"\*|[A-Za-z][\w-]*|#[\w-]+|[A-Za-z][\w-]*\.[\w-]+|\.[\w-]+")
 
 
 class Visibility:
@@ -263,3 +267,27 @@ def styled_names(root: ET.Element) -> set[str]:
         for text in texts:
             names.update(d.split(":", 1)[0].strip() for d in text.split(";") if ":" in d)
     return names
+
+
+def unapplied_rules(root: ET.Element) -> list[str]:
+    """A note naming the ``<style>`` selectors that are not applied (descendant, child, attribute ones), if any.
+
+    svgelements applies rules whose selector is ``*``, ``tag``, ``#id``, ``.class`` or ``tag.class``;
+    a rule such as ``g.hidden path {display: none}`` is skipped, so what it would hide or restyle is
+    read as if it were not there. The note says so rather than tracing silently what SVG would not draw.
+    """
+    skipped = []
+    for element in root.iter():
+        if local_tag(element.tag) != "style":
+            continue
+        for head in _CSS_RULE.findall(_CSS_COMMENT.sub("", element.text or "")):
+            for selector in (part.strip() for part in head.split(",")):
+                if selector and not selector.startswith("@") and not _SIMPLE_SELECTOR.fullmatch(selector):
+                    skipped.append(" ".join(selector.split()))
+    if not skipped:
+        return []
+    shown = ", ".join(repr(x) for x in dict.fromkeys(skipped[:5]))
+    more = f" and {len(skipped) - 5} more" if len(skipped) > 5 else ""
+    return [f"<style> rules with the selectors {shown}{more} are not applied (only *, tag, #id, .class and "
+            "tag.class are): shapes they would hide or restyle are read as if the rules were absent; give them a "
+            "class or a style attribute, or pick paths with --path ID"]
