@@ -110,3 +110,26 @@ def test_a_plan_is_the_same_compiled_or_interpreted(cache, monkeypatch):
     # planned again: loaded from the cache, nothing new compiled
     _plan_arc(monkeypatch, True)
     assert sorted(p.name for p in cache.rglob("*.so")) == libraries
+
+
+@needs_cc
+def test_a_damaged_library_in_the_cache_is_compiled_again(cache):
+    fn = _function()
+    nat.native(fn)
+    [library] = cache.rglob("st_*.so")
+    library.write_bytes(b"not a shared library")
+    again = nat.native(fn)
+    assert not again.is_a("SXFunction")
+    args = _inputs(fn, np.random.default_rng(2), 1)
+    np.testing.assert_allclose(np.asarray(again(*args)[0]), np.asarray(fn(*args)[0]), rtol=1e-14)
+
+
+def test_no_home_folder_means_no_cache_not_an_error(monkeypatch):
+    monkeypatch.delenv("SKATETRACE_CACHE_DIR", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+
+    def no_home():
+        raise RuntimeError("Could not determine home directory.")
+    monkeypatch.setattr(nat.Path, "home", staticmethod(no_home))
+    fn = _function()
+    assert nat.native(fn) is fn

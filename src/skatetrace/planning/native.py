@@ -114,17 +114,24 @@ def native(fn: ca.Function) -> ca.Function:
     cc = compiler() if _enabled() else None
     if cc is None or not fn.is_a("SXFunction"):
         return fn
-    key = _key(fn, cc)
-    name = f"st_{key}"  # a name of its own: libraries loaded side by side never share a symbol
-    folder = cache_dir()
-    library = folder / f"{name}.so"
     try:
-        if not library.exists():
-            folder.mkdir(parents=True, exist_ok=True)
-            with _locked(folder / f"{name}.lock"):
-                if not library.exists():  # another process may have compiled it meanwhile
-                    _build(fn, name, library, cc)
-        loaded = ca.external(name, str(library))
+        key = _key(fn, cc)
+        name = f"st_{key}"  # a name of its own: libraries loaded side by side never share a symbol
+        folder = cache_dir()  # (RuntimeError where no home folder can be found)
+        library = folder / f"{name}.so"
+        for attempt in range(2):
+            if not library.exists():
+                folder.mkdir(parents=True, exist_ok=True)
+                with _locked(folder / f"{name}.lock"):
+                    if not library.exists():  # another process may have compiled it meanwhile
+                        _build(fn, name, library, cc)
+            try:
+                loaded = ca.external(name, str(library))
+                break
+            except RuntimeError:
+                if attempt:
+                    raise
+                library.unlink(missing_ok=True)  # a damaged library (a disk full, say): compiled again
     except (OSError, RuntimeError, subprocess.SubprocessError):
         return fn
     if loaded.n_in() != fn.n_in() or loaded.n_out() != fn.n_out():  # pragma: no cover - a foreign file
