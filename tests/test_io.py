@@ -67,7 +67,6 @@ def test_controls_csv_formatted_in_two_processes_is_the_same_text_and_reads_back
 # strict JSON, file modes, output folders
 
 import json
-import math
 import stat
 import subprocess
 import sys
