@@ -113,7 +113,7 @@ def _direction(piece: Piece, t: float, side: int, vscale: float, cusp: bool = Fa
 
 
 def _turn_across(piece: Piece, t: float, reach: float) -> float:
-    """The angle (radians) between the unit tangents where the curve leaves the ball of radius ``reach`` around ``r(t)``.
+    """The angle (radians) between the tangents where the curve leaves the ball of radius ``reach`` about ``r(t)``.
 
     On each side the parameter where the distance from ``r(t)`` first reaches ``reach`` (bisected
     on a grid), or the piece's end if it stays inside.
@@ -226,7 +226,7 @@ class _Range(NamedTuple):
 
 
 def _ranges(path: Path, prep: _Prepared, tip: float = 0.0) -> list[_Range]:
-    """Pieces cut at their cusps (and hairpin tips tighter than ``tip``), with pieces and bits of pieces below rounding dropped."""
+    """Pieces cut at their cusps (and hairpin tips tighter than ``tip``), bits below rounding dropped."""
     out = []
     for i, p in enumerate(path.pieces):
         if prep.lengths[i] <= TINY * prep.scale:
@@ -335,11 +335,11 @@ def split_path(path: Path, *, corner_tol_deg: float = 0.5) -> list[Run]:
     cusp when ``|r'|^2 / |r''|`` (a lower bound of the radius of curvature there) is below
     ``CUSP_RADIUS`` times the size. Its two sides have limit directions ``-r''`` and ``+r''``, so a true
     cusp turns by about ``pi``. The fitters (not this function, which has no tolerance) also cut
-    hairpin tips tighter than their tolerance (:data:`TIP_RADIUS`, :data:`TIP_TURN_DEG`). Spiral spans: sign changes of kappa and of its grid differences on 513
-    points per stretch, ignoring values within their rounding error (see
-    :func:`~skatetrace.drawings.spirals._spiral_spans`), refined by brentq (on kappa, and on a central
-    difference of kappa, with a bounded minimisation of kappa as fall-back); splits within
-    ``SPLIT_MIN`` of an end or of each other are dropped.
+    hairpin tips tighter than their tolerance (:data:`TIP_RADIUS`, :data:`TIP_TURN_DEG`). Spiral
+    spans: sign changes of kappa and of its grid differences on 513 points per stretch, ignoring
+    values within their rounding error (see :func:`~skatetrace.drawings.spirals._spiral_spans`),
+    refined by brentq (on kappa, and on a central difference of kappa, with a bounded minimisation
+    of kappa as fall-back); splits within ``SPLIT_MIN`` of an end or of each other are dropped.
 
     Examples
     --------

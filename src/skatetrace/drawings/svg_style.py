@@ -284,10 +284,11 @@ def unapplied_rules(root: ET.Element) -> list[str]:
             for selector in (part.strip() for part in head.split(",")):
                 if selector and not selector.startswith("@") and not _SIMPLE_SELECTOR.fullmatch(selector):
                     skipped.append(" ".join(selector.split()))
-    if not skipped:
+    unique = list(dict.fromkeys(skipped))
+    if not unique:
         return []
-    shown = ", ".join(repr(x) for x in dict.fromkeys(skipped[:5]))
-    more = f" and {len(skipped) - 5} more" if len(skipped) > 5 else ""
+    shown = ", ".join(repr(x) for x in unique[:5])
+    more = f" and {len(unique) - 5} more" if len(unique) > 5 else ""
     return [f"<style> rules with the selectors {shown}{more} are not applied (only *, tag, #id, .class and "
             "tag.class are): shapes they would hide or restyle are read as if the rules were absent; give them a "
             "class or a style attribute, or pick paths with --path ID"]

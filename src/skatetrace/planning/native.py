@@ -12,9 +12,11 @@ a library is written under a temporary name and renamed into place, and a lock k
 processes (the planner's workers) from compiling the same function at once. The masses and the
 planner's options are constants of the blocks, so each skater compiles once (about 5 s), and
 every later plan for that skater loads the library. (Made inputs instead, they would serve every
-skater, but change the expressions' rounding, and IPOPT's path with it: plans would move.) Where there is no C compiler, the
-cache cannot be written, or compiling fails, the function is returned as it was and evaluated by
-CasADi's virtual machine: slower, never wrong. ``SKATETRACE_NATIVE=0`` turns compiling off.
+skater, but change the expressions' rounding, and IPOPT's path with it: plans would move.)
+
+Where there is no C compiler, the cache cannot be written, or compiling fails, the function is
+returned as it was and evaluated by CasADi's virtual machine: slower, never wrong (a damaged
+library is compiled again). ``SKATETRACE_NATIVE=0`` turns compiling off.
 """
 
 from __future__ import annotations
@@ -99,7 +101,7 @@ def _build(fn: ca.Function, name: str, library: Path, cc: str) -> None:
 
 
 def native(fn: ca.Function) -> ca.Function:
-    """``fn`` compiled to machine code (from the cache, or compiled into it now); ``fn`` itself where that cannot be done.
+    """``fn`` compiled to machine code (from the cache, or compiled into it now), or ``fn`` itself where it cannot be.
 
     Parameters
     ----------
