@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
 import sys
@@ -70,7 +71,8 @@ def _enabled() -> bool:
 
 def _key(fn: ca.Function, cc: str) -> str:
     h = hashlib.sha256(fn.serialize().encode())
-    h.update("\0".join((cc, *FLAGS, ca.__version__, sys.platform)).encode())
+    # the machine too: a home folder shared by an x86-64 and an ARM machine keeps both libraries
+    h.update("\0".join((cc, *FLAGS, ca.__version__, sys.platform, platform.machine())).encode())
     return h.hexdigest()[:24]
 
 
