@@ -133,3 +133,27 @@ def test_no_home_folder_means_no_cache_not_an_error(monkeypatch):
     monkeypatch.setattr(nat.Path, "home", staticmethod(no_home))
     fn = _function()
     assert nat.native(fn) is fn
+
+
+def test_ctrl_c_while_compiling_stops_the_run_even_where_casadi_makes_it_an_error(cache, monkeypatch):
+    import os
+    import signal
+    import time
+
+    monkeypatch.setenv("CC", "cc")  # a compiler is named; it is never run
+    monkeypatch.setattr(nat.shutil, "which", lambda name: "/usr/bin/cc")
+
+    def interrupted(*args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)
+        except KeyboardInterrupt:
+            raise RuntimeError("Error in Function::generate: KeyboardInterruptException") from None
+
+    monkeypatch.setattr(nat, "_build", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        nat.native(_function())
+    # without an interrupt, the same error is a function left interpreted
+    monkeypatch.setattr(nat, "_build", lambda *a: (_ for _ in ()).throw(RuntimeError("no")))
+    fn = _function()
+    assert nat.native(fn) is fn

@@ -17,6 +17,7 @@ answer are run here. Every job runs the same code either way, so the answers do 
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import signal
@@ -25,8 +26,8 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "can_fork", "map_forked", "quiet_on_interrupt", "run_jobs",
-           "worker_count"]
+__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "can_fork", "map_forked", "quiet_on_interrupt",
+           "recording_interrupts", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
 #: hundred MB, so a many-core machine is not filled with them by default.
@@ -60,6 +61,32 @@ def quiet_on_interrupt() -> None:
     """In a worker: Ctrl-C (which a terminal sends to every process of the run) ends it at once and
     quietly; the parent reports the interrupt."""
     signal.signal(signal.SIGINT, lambda signum, frame: os._exit(130))
+
+
+@contextlib.contextmanager
+def recording_interrupts():
+    """Record a SIGINT (Ctrl-C) that arrives while the block runs (the list yielded gets an item), and
+    raise KeyboardInterrupt as Python does. Only in the main thread, where Python handles signals.
+
+    For code that calls into libraries which catch the interrupt themselves (CasADi turns it into
+    a failed solve or a ``RuntimeError``): after the block, a non-empty list means the user asked
+    to stop, whatever the library made of it.
+    """
+    caught: list[bool] = []
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield caught
+        return
+
+    def handler(signum, frame):
+        caught.append(True)
+        previous(signum, frame)
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield caught
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _stop(pool: ProcessPoolExecutor) -> None:

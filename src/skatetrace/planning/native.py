@@ -33,6 +33,8 @@ from pathlib import Path
 
 import casadi as ca
 
+from ..processes import recording_interrupts
+
 try:
     import fcntl
 except ImportError:  # pragma: no cover - platforms without POSIX locks: two processes may compile alike
@@ -118,6 +120,16 @@ def native(fn: ca.Function) -> ca.Function:
     cc = compiler() if _enabled() else None
     if cc is None or not fn.is_a("SXFunction"):
         return fn
+    with recording_interrupts() as caught:
+        loaded = _native(fn, cc)
+    if caught:  # Ctrl-C while CasADi generated or loaded code, which may have made it a RuntimeError
+        raise KeyboardInterrupt
+    if loaded.n_in() != fn.n_in() or loaded.n_out() != fn.n_out():  # pragma: no cover - a foreign file
+        return fn
+    return loaded
+
+
+def _native(fn: ca.Function, cc: str) -> ca.Function:
     try:
         key = _key(fn, cc)
         name = f"st_{key}"  # a name of its own: libraries loaded side by side never share a symbol
@@ -137,7 +149,5 @@ def native(fn: ca.Function) -> ca.Function:
                     raise
                 library.unlink(missing_ok=True)  # a damaged library (a disk full, say): compiled again
     except (OSError, RuntimeError, subprocess.SubprocessError):
-        return fn
-    if loaded.n_in() != fn.n_in() or loaded.n_out() != fn.n_out():  # pragma: no cover - a foreign file
         return fn
     return loaded

@@ -17,16 +17,13 @@ each times a constant (a collocation interval's length is a piece's duration tim
 
 from __future__ import annotations
 
-import contextlib
-import math
-import signal
-import threading
 from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 import scipy.sparse as sps
 
+from ..processes import recording_interrupts
 from .native import native
 
 __all__ = ["SparseProgram", "ProgramResult"]
@@ -77,27 +74,6 @@ class _Blocks:
         """``(sum rows_out, N)``: the constraint row of each row of the constrained outputs stacked."""
         rows = [r for r in self.rows if r is not None]
         return np.vstack(rows) if rows else np.zeros((0, self.index.shape[1]), dtype=np.int64)
-
-
-@contextlib.contextmanager
-def _interrupts():
-    """Record a SIGINT (Ctrl-C) that arrives while the block runs (the list yielded gets an item), and
-    raise KeyboardInterrupt as Python does. Only in the main thread, where Python handles signals."""
-    caught: list[bool] = []
-    previous = signal.getsignal(signal.SIGINT)
-    if threading.current_thread() is not threading.main_thread() or not callable(previous):
-        yield caught
-        return
-
-    def handler(signum, frame):
-        caught.append(True)
-        previous(signum, frame)
-
-    signal.signal(signal.SIGINT, handler)
-    try:
-        yield caught
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 class SparseProgram:
@@ -329,7 +305,7 @@ class SparseProgram:
         solver = ca.nlpsol("plan", "ipopt", nlp, opts)
         lbg = np.concatenate(self._lbg) if self._lbg else np.zeros(0)
         ubg = np.concatenate(self._ubg) if self._ubg else np.zeros(0)
-        with _interrupts() as caught:
+        with recording_interrupts() as caught:
             sol = solver(x0=self.x0, lbx=self.lbx, ubx=self.ubx, lbg=lbg, ubg=ubg)
         if caught:
             # CasADi turns Ctrl-C into a failed solve ("NonIpopt_Exception_Thrown"), and a caller
