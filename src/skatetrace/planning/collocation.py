@@ -26,6 +26,7 @@ import casadi as ca
 import numpy as np
 
 from .nlp import SparseProgram
+from ..processes import recording_interrupts
 from .symbolic import sleigh_functions
 
 __all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "program_too_large",
@@ -279,12 +280,16 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     be given on the same nodes. Never raises for a program IPOPT cannot solve: the result says so,
     also where CasADi or IPOPT stop with an error (out of memory, say: ``status="solver_error"``).
     """
-    try:
-        return _solve_program(sections, options, guess, meshes)
-    except (RuntimeError, MemoryError) as exc:  # CasADi raises RuntimeError for its own and IPOPT's errors
-        text = " ".join(str(exc).split())
-        reason = "out of memory" if "bad_alloc" in text or isinstance(exc, MemoryError) else text[-200:]
-        return ProgramSolution(success=False, status="solver_error", message=f"the solver stopped: {reason}")
+    with recording_interrupts() as caught:
+        try:
+            return _solve_program(sections, options, guess, meshes)
+        except (RuntimeError, MemoryError) as exc:  # CasADi raises RuntimeError for its own and IPOPT's errors
+            if caught:  # Ctrl-C inside CasADi (building the program, say), which made it an error: stop
+                raise KeyboardInterrupt from None
+            error = exc
+    text = " ".join(str(error).split())
+    reason = "out of memory" if "bad_alloc" in text or isinstance(error, MemoryError) else text[-200:]
+    return ProgramSolution(success=False, status="solver_error", message=f"the solver stopped: {reason}")
 
 
 def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, meshes) -> ProgramSolution:
