@@ -161,9 +161,11 @@ def _cusps(piece: Piece, scale: float, tip: float = 0.0) -> list[float]:
         return []
     left = np.concatenate([[np.inf], sp[:-1]])
     right = np.concatenate([sp[1:], [np.inf]])
-    with np.errstate(all="ignore"):
-        d2 = piece.d2(t)
-        tight = sp * sp <= tip * np.hypot(d2[0], d2[1])
+    tight = False  # without a tip length, only the speed's own minima (a zero speed is one of them)
+    if tip > 0:
+        with np.errstate(all="ignore"):
+            d2 = piece.d2(t)
+            tight = sp * sp <= tip * np.hypot(d2[0], d2[1])
     cand = np.nonzero((sp <= left) & (sp <= right) & ((sp < 1e-2 * top) | tight))[0]
     out: list[float] = []
 
