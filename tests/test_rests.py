@@ -166,6 +166,63 @@ def test_search_bounds_the_placements_tried_after_the_first_that_works():
         TraceOptions(search=-1)
 
 
+def test_max_placements_gives_up_on_a_section_after_that_many_placements_none_of_which_worked(monkeypatch):
+    # issue 19: a zigzag read as one smooth section of 585 arcs has some 3,000 placements, which all
+    # fail there (minutes); a section gives up after max_placements of them
+    from skatetrace.figures.school import school_figure
+    from skatetrace.tracing import sections as tracing
+
+    sec = school_figure("three", height=1.7).curves[0].sections()[1]
+    params = skater_params(height=1.7)
+    tried = []
+    assemble = tracing._assemble
+    monkeypatch.setattr(tracing, "_assemble", lambda *a: tried.append(r := assemble(*a)) or r)
+    first = tracing.trace_section(params, sec, TraceOptions(speed=2.0, placement="first"))
+    k = len(tried)
+    assert first.success and k > 1 and not any(t.success for t in tried[:-1])
+    assert tracing.trace_section(params, sec, TraceOptions(speed=2.0, placement="first", max_placements=k)).glide \
+        == first.glide
+    tried.clear()
+    short = tracing.trace_section(params, sec, TraceOptions(speed=2.0, max_placements=k - 1))
+    assert not short.success and len(tried) == k - 1 and not short.phases
+    total = len(tracing._glide_candidates(params, sec.segments, 0, 0.1, TraceOptions())) \
+        + len(tracing._glide_candidates(params, sec.segments, 1, 0.1, TraceOptions()))
+    assert f"gave up after {k - 1} of its {total} glide placements" in short.message
+    for bad in (0, -1, 2.0, True):
+        with pytest.raises(ValueError, match="max_placements"):
+            TraceOptions(max_placements=bad)
+
+
+def test_auto_stops_adding_rests_when_two_rounds_in_a_row_verify_no_more_of_the_figure(monkeypatch):
+    # issue 19: every round doubles the sections to trace; where halving stops helping (a zigzag:
+    # no piece of it traced in 10, 16, 42 s rounds) the loop ends with a note
+    segs = tuple(Segment(0.3 * (-1) ** k, 1.0) for k in range(8))
+    fig = Figure("z", (Curve(segs, (SMOOTH,) * 7, name="z"),))
+    monkeypatch.setattr(rests_module, "schedule_from_trace", lambda trace: (None, {}))
+    monkeypatch.setattr(rests_module, "_finish", lambda result, limits: result)
+
+    def verifier(passes):
+        def fake_verify(trace, schedule, rel_tol):
+            secs = [{"passed": passes(s.section)} for s in trace.sections]
+            ok = all(s["passed"] for s in secs)
+            return SimpleNamespace(success=ok, sections=secs, message="ok" if ok else "too far")
+        return fake_verify
+
+    monkeypatch.setattr(rests_module, "verify", verifier(lambda sec: False))
+    res = trace_and_verify(fig, rests="auto")
+    # rounds 2 and 3 (2 and 4 sections) verified nothing more than round 1; the fourth would have
+    # traced 8 sections of a piece each
+    assert not res.success and res.rounds == 3 and len(res.trace.sections) == 4
+    assert "stopped adding rests after 3 rounds" in res.message and res.note
+    # a round that verifies more keeps the loop going: the last quarter verifies in round 3, and
+    # round 4 splits the sections before it into single pieces
+    monkeypatch.setattr(rests_module, "verify", verifier(lambda sec: [p.index for p in sec.pieces] in ([6, 7], [7])))
+    res = trace_and_verify(fig, rests="auto")
+    assert res.rounds == 4 and len(res.trace.sections) == 7 and not res.success and not res.note  # [6, 7] kept
+    never = trace_and_verify(fig, rests="never")
+    assert never.note == ""
+
+
 def test_add_rests_keeps_the_path_and_only_touches_the_named_curve():
     a = Curve((Segment(1.0, 1.0), Segment(-1.0, 1.0), Segment(0.0, 1.0)), (SMOOTH, SMOOTH), name="a")
     b = Curve((Segment(0.5, 1.0), Segment(0.0, 1.0)), (SMOOTH,), name="b")

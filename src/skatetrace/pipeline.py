@@ -50,7 +50,7 @@ class VerifiedTrace:
     ``(curve index, piece index)`` of the piece after each rest. ``rounds`` counts the
     trace-and-verify passes. ``feasibility`` is the second verdict: could a skater make these
     controls (:mod:`skatetrace.verification.feasibility`)?  ``success`` is the first one only: traced and
-    verified, exact for the model.
+    verified, exact for the model. ``note`` says why adding rests stopped early, if it did.
     """
 
     figure: Figure
@@ -61,6 +61,7 @@ class VerifiedTrace:
     rests: tuple[tuple[int, int], ...]
     rounds: int
     feasibility: Feasibility | None = None
+    note: str = ""
 
     @property
     def success(self) -> bool:
@@ -75,7 +76,8 @@ class VerifiedTrace:
         rests = f"; {len(self.rests)} rest(s) added at smooth joins" if self.rests else ""
         if self.success:
             return f"traced and verified{rests}"
-        return (self.trace.message if not self.trace.success else self.report.message) + rests
+        note = f"; {self.note}" if self.note else ""
+        return (self.trace.message if not self.trace.success else self.report.message) + rests + note
 
     @property
     def verdict(self) -> str:
@@ -84,6 +86,11 @@ class VerifiedTrace:
         if self.feasibility is None:
             return "verified" if verified else "verification failed"
         return self.feasibility.verdict(verified)
+
+
+#: Rounds of rests in a row that verify no more of the figure than the rounds before them, after which
+#: ``rests="auto"`` stops.
+_BARREN_ROUNDS = 2
 
 
 def middle_join(section: Section) -> int | None:
@@ -126,7 +133,9 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     ----------
     rests : {"auto", "never", "joins"}
         ``"auto"`` (default) adds a rest in the middle of each failing section and of the
-        sections before it on its curve, and tries again, at most ``max_rounds`` times;
+        sections before it on its curve, and tries again, at most ``max_rounds`` times, and
+        no more once two rounds in a row have verified no more of the figure than before them
+        (the result's ``note`` says so);
         ``"never"`` traces the figure as given; ``"joins"`` rests at every smooth join.
     rel_tol : float
         Verification tolerance as a fraction of the figure's size (:func:`~skatetrace.verification.verify.verify`).
@@ -153,6 +162,7 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     current = add_rests(figure, added)
     cache: dict[tuple, Any] = {}  # sections solved in one round are reused in the next
     rounds = 0
+    verified: list[float] = []  # per round, the length of the figure traced and verified
     while True:
         rounds += 1
         if options.reach is None:
@@ -166,6 +176,14 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         # a planned figure is planned once: a rest changes the program, and the plan says why it failed
         if result.success or rests != "auto" or rounds > max_rounds or options.reach is not None:
             return _finish(result, limits)
+        verified.append(sum(sec.section.length for sec, checks in zip(trace.sections, report.sections)
+                            if sec.success and checks.get("passed", False)))
+        if len(verified) > _BARREN_ROUNDS and verified[-1] <= max(verified[:-_BARREN_ROUNDS]):
+            # splitting has stopped helping: each round doubles the sections to trace (a zigzag
+            # read as one smooth curve took 10, 16, then 42 s a round, none of its pieces traced)
+            return _finish(replace(result, note=(
+                f"stopped adding rests after {rounds} rounds: the last {_BARREN_ROUNDS} traced and verified no more "
+                f"of the figure than the round before them")), limits)
         # The replay carries each section's end state into the next, so a section may fail for an
         # error made before it: every section of the curve up to its last failing one is split.
         last_bad: dict[int, int] = {}
