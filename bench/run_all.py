@@ -10,7 +10,10 @@ Scenarios (each a script in bench/, run in this one process, in this order):
 4. ``bench_scaling``: time versus number of pieces (1 to 1000 distinct arcs) and versus the fit
    tolerance (examples/serpentine.svg);
 5. ``bench_planning``: the school figures for a 1.7 m skater planned within 0.5 m (issue 15),
-   against their launch-glide-stop manoeuvres.
+   against their launch-glide-stop manoeuvres;
+6. ``bench_cold``: every school figure and example drawing (exact mode included) from a cold CLI
+   start with the default planner, as multiples of the double flower's cold time in the same run,
+   and each run's peak memory (issue 18).
 
 ``--quick``: fewer repetitions, sizes <= 100, one traced tolerance (a few minutes). ``--smoke``: tiny
 cases (a straight line instead of the double flower, 3 arcs instead of 200, ...) for CI: the numbers
@@ -34,6 +37,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
+import bench_cold  # noqa: E402
 import bench_double_flower  # noqa: E402
 import bench_long_figure  # noqa: E402
 import bench_paper_arcs  # noqa: E402
@@ -48,6 +52,7 @@ MODES = {
         "long_figure": ["--pieces", "200"],
         "scaling": ["--sizes", "1", "10", "100", "1000", "--budget", "600"],
         "planning": ["--reach", "0.5"],
+        "cold": ["--timeout", "300"],
     },
     "quick": {
         "paper_arcs": ["1"],
@@ -55,6 +60,8 @@ MODES = {
         "long_figure": ["--pieces", "200"],
         "scaling": ["--quick", "--runs", "1", "--tols", "1e-2", "1e-3", "1e-4", "--trace-tols", "1e-2", "--fit-runs", "1"],
         "planning": ["three", "paragraph-double-three", "--reach", "0.5"],
+        "cold": ["school:three", "school:one-foot-eight", "figure-eight-svg", "three-turn-exact", "--flower-runs", "1",
+                 "--timeout", "120"],
     },
     "smoke": {
         "paper_arcs": ["1", "--maxiter", "1"],
@@ -62,10 +69,11 @@ MODES = {
         "long_figure": ["--pieces", "3"],
         "scaling": ["--sizes", "1", "2", "--runs", "1", "--tols", "1e-2", "--trace-tols", "--fit-runs", "1"],
         "planning": ["paper-arc"],
+        "cold": ["flower-with-stems", "--flower-runs", "1", "--timeout", "120"],
     },
 }
 SCRIPTS = {"paper_arcs": bench_paper_arcs, "double_flower": bench_double_flower, "long_figure": bench_long_figure,
-           "scaling": bench_scaling, "planning": bench_planning}
+           "scaling": bench_scaling, "planning": bench_planning, "cold": bench_cold}
 
 # The issue's targets.
 FLOWER_WARM_S = 0.5
@@ -76,6 +84,10 @@ PAPER_RESIDUAL = 1e-10
 LONG_S = 5.0
 LINEAR_SLOPE = 1.1  # "linear": log-log slope over sizes >= 10 at most this
 PLAN_S = 10.0  # issue 15: each school figure planned (and traced and verified) within this, warm
+ARC_S = 0.5e-3  # issue 18: a single arc traced warm
+THOUSAND_S = 1.0  # issue 18: 1000 distinct arcs traced warm
+COLD_RATIO = 5.0  # issue 18: every school figure and example drawing from a cold start, as multiples of the flower's
+FLOWER_MB = 300.0  # issue 18: the double flower's peak memory
 
 
 # ----------------------------------------------------------------------------------------------
@@ -210,6 +222,30 @@ def targets(res: dict) -> list[dict]:
                                      f"{_f(s['all'], '.3f')})",
                          "ratio": f"slope {_f(slope, '.2f')} (linear = 1; met if <= {LINEAR_SLOPE})",
                          "met": None if math.isnan(slope) else slope <= LINEAR_SLOPE})
+    if sc:
+        by_size = {r["pieces"]: r for r in sc["pieces"]["rows"] if not r["skipped"]}
+        for n, limit, label in ((1, ARC_S, "a single arc"), (1000, THOUSAND_S, "1000 distinct arcs")):
+            r = by_size.get(n)
+            if r is not None:
+                ms = r["trace_s"] * 1e3
+                rows.append({"key": f"arcs_{n}", "target": f"{label} traced warm <= {limit * 1e3:g} ms",
+                             "measured": f"{ms:.3g} ms ({ms / n:.3g} ms an arc; {len(r['failed'])} failed)",
+                             "ratio": f"{r['trace_s'] / limit:.2g}x the target",
+                             "met": r["trace_s"] <= limit and not r["failed"]})
+    cold = res.get("cold")
+    if cold:
+        fl_c = cold["flower"]
+        rows.append({"key": "flower_mb", "target": f"double-flower peak memory, cold CLI <= {FLOWER_MB:g} MB",
+                     "measured": f"{fl_c['peak_mb']:.0f} MB (largest of {len(fl_c['wall'])} runs)",
+                     "ratio": f"{fl_c['peak_mb'] / FLOWER_MB:.2g}x the target", "met": fl_c["peak_mb"] <= FLOWER_MB})
+        for r in cold["rows"]:
+            state = (f"stopped after {cold['timeout']:g} s" if r["timed_out"] else f"exit {r['returncode']}")
+            rows.append({"key": f"cold_{r['name']}",
+                         "target": f"{r['name']} from a cold CLI start <= {COLD_RATIO:g}x the double flower's",
+                         "measured": f"{r['wall']:.1f} s against {fl_c['wall_median']:.2f} s ({state}; peak "
+                                     f"{r['peak_mb']:.0f} MB); {r['verdict'][:60]}",
+                         "ratio": f"{'>= ' if r['timed_out'] else ''}{r['ratio']:.2g}x the double flower",
+                         "met": not r["timed_out"] and r["ratio"] <= COLD_RATIO})
     for r in res.get("planning", []):
         within = r["duration_after"] > 0 and r["reach_after"] <= r["reach"]
         rows.append({"key": f"plan_{r['figure']}",
@@ -504,6 +540,18 @@ def write_markdown(path: Path, res: dict, meta: dict) -> None:
               "with its worker processes) as a multiple of the double flower's warm trace-and-verify in the "
               "same run.", ""]
         L += bench_planning.markdown(pl).splitlines()
+    cold = res.get("cold")
+    if cold:
+        L += ["", _scenario_header(meta, "cold", "6. From a cold CLI start, against the double flower (issue 18)"),
+              "Each command as a user runs it (`skatetrace trace ... --no-plots --no-viewer`, the default "
+              "planner), in a fresh interpreter, in this order in one sitting; the ratio is to the double "
+              f"flower's median cold time ({cold['flower']['wall_median']:.2f} s, runs "
+              f"{', '.join(f'{w:.2f}' for w in cold['flower']['wall'])} s). Peak memory: `ru_maxrss` as `wait4` "
+              "reports it.", ""]
+        L += _table(["command", "wall s", "x flower", "exit", "peak MB", "verdict"],
+                    [[" ".join(r["args"]), f"{r['wall']:.1f}", f"{r['ratio']:.1f}",
+                      "stopped" if r["timed_out"] else r["returncode"], f"{r['peak_mb']:.0f}", r["verdict"][:90].replace("|", "/")]
+                     for r in cold["rows"]])
     L += [""] + robustness_section()
     L += [""] + profile_section(res, tgt)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -113,13 +113,14 @@ def test_run_all_smoke(tmp_path, capsys):
     for heading in ("## Machine", "## Versions", "## Targets (issues 6, 15, 18)", "## 1. The paper's three arcs",
                     "## 2. line end to end", "## 3. A long figure: 3 distinct arcs", "## 4. Scaling",
                     "## 5. Bounded-reach planning (issue 15)", "| paper-arc |",
+                    "## 6. From a cold CLI start, against the double flower (issue 18)",
                     "## Profile and what would close the gap", "Smoke mode", "Load average"):
         assert heading in text
     for pkg in ("numpy", "scipy", "numba", "matplotlib", "skatetrace"):
         assert f"| {pkg} |" in text
     keys = {t["key"] for t in out["targets"]}
     assert {"flower_warm", "flower_cold", "flower_first", "paper_arc_1", "paper_arc_2", "paper_arc_3", "long_trace", "long_total",
-            "linear_trace", "linear_total", "plan_paper-arc"} <= keys
+            "linear_trace", "linear_total", "plan_paper-arc", "arcs_1", "flower_mb", "cold_flower-with-stems"} <= keys
     assert all(t["met"] in (True, False, None) for t in out["targets"])
     res = out["results"]
     assert all(r["exact_success"] and r["exact_residual"] <= 1e-10 for r in res["paper_arcs"])
@@ -137,6 +138,24 @@ def test_run_all_smoke(tmp_path, capsys):
                 assert lines[j].replace("\\|", "").count("|") == n, lines[j]
                 j += 1
     assert "wrote" in capsys.readouterr().out
+
+
+def test_bench_cold_times_each_command_against_the_flower_and_stops_one_past_its_timeout(capsys):
+    # issue 18: every school figure and example drawing, exact mode included, against the double flower
+    bench = _load("bench_cold")
+    every = bench.commands()
+    from skatetrace import school_names
+
+    assert {f"school:{n}" for n in school_names()} <= set(every)
+    assert {"serpentine-exact", "points-eight-exact", "three-turn-svg"} <= set(every) and "double-flower" not in every
+    out = bench.main(["flower-with-stems", "--flower-runs", "1"])
+    (row,) = out["rows"]
+    assert out["flower"]["returncodes"] == [0] and row["returncode"] == 0 and not row["timed_out"]
+    assert row["ratio"] == row["wall"] / out["flower"]["wall_median"] and row["peak_mb"] > 10.0
+    assert row["verdict"].startswith("verified")
+    stopped = bench.main(["school:three", "--flower-runs", "1", "--timeout", "0.2"])
+    assert stopped["rows"][0]["timed_out"] and stopped["rows"][0]["returncode"] is None
+    assert "TIMED OUT" in capsys.readouterr().out
 
 
 def test_bench_planning_on_the_paper_arc(capsys):

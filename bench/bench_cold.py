@@ -1,0 +1,105 @@
+"""Benchmark: school figures and example drawings from a cold CLI start, as multiples of the double flower (issue 18).
+
+Run: python bench/bench_cold.py [NAME ...] [--timeout S] [--flower-runs K]
+
+Each command runs as a user runs it, in a fresh interpreter: ``skatetrace trace FIGURE ...
+--no-plots --no-viewer`` into an empty folder, with the default planner (``--reach auto`` for a
+figure in metres). The double flower runs first (``--flower-runs`` times, the median kept), then
+every NAME in the same sitting: ``school:NAME`` for each school figure of a 1.7 m skater and the
+example drawings of ``bench/measure_examples.py`` (exact mode included). Per command: the wall
+time, its ratio to the double flower's, the exit code, the verdict line, and the run's peak
+resident memory (``ru_maxrss`` of the process as ``wait4`` reports it: the largest of the
+process and the workers it waited for). A command still running after ``--timeout`` seconds is
+stopped and reported as such (its ratio is at least the timeout's). Nothing is asserted about time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:
+    sys.path.insert(0, str(HERE))
+from _common import median  # noqa: E402
+from bench_double_flower import cli_command  # noqa: E402
+from measure_examples import EXAMPLES, ROOT  # noqa: E402
+
+from skatetrace import school_names  # noqa: E402
+
+FLOWER = ["double-flower"]
+
+
+def commands() -> dict[str, list[str]]:
+    """Every measured command's arguments after ``skatetrace trace``, by name (the double flower excluded)."""
+    out = {f"school:{name}": [f"school:{name}", "--height", "1.7"] for name in school_names()}
+    for name, (args, _what) in EXAMPLES.items():
+        if args != FLOWER and not args[0].startswith("school:"):
+            out[name] = list(args)
+    return out
+
+
+def run_cold(args: list[str], timeout: float) -> dict:
+    """One cold CLI run of ``skatetrace trace ARGS``: wall time, exit code, last lines, peak memory (MB)."""
+    with tempfile.TemporaryDirectory(prefix="skatetrace-cold-") as tmp:
+        log = Path(tmp) / "log"
+        cmd = cli_command() + ["trace", *args, "--out", str(Path(tmp) / "out"), "--no-plots", "--no-viewer"]
+        with open(log, "wb") as sink:
+            t0 = time.perf_counter()
+            # the examples' paths are relative to the repository; its own session, to stop it whole
+            proc = subprocess.Popen(cmd, cwd=ROOT, stdout=sink, stderr=subprocess.STDOUT, start_new_session=True)
+            pid, timed_out = proc.pid, False
+            while True:
+                done, status, usage = os.wait4(pid, os.WNOHANG)
+                if done:
+                    break
+                if time.perf_counter() - t0 > timeout:
+                    timed_out = True
+                    os.killpg(pid, signal.SIGKILL)
+                    _done, status, usage = os.wait4(pid, 0)
+                    break
+                time.sleep(0.02)
+            wall = time.perf_counter() - t0
+            proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here, for its memory
+        text = log.read_text(errors="replace").strip().splitlines()
+    verdict = next((line for line in reversed(text) if line.startswith("verdict:")), text[-1] if text else "")
+    return {"args": args, "wall": wall, "timed_out": timed_out,
+            "returncode": None if timed_out else os.waitstatus_to_exitcode(status),
+            "peak_mb": usage.ru_maxrss / 1024.0, "verdict": verdict.removeprefix("verdict: ")}
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("names", nargs="*", help="school:NAME or an example of bench/measure_examples.py (default: all)")
+    ap.add_argument("--timeout", type=float, default=300.0, help="seconds before a command is stopped (default 300)")
+    ap.add_argument("--flower-runs", type=int, default=3, help="cold runs of the double flower (default 3)")
+    args = ap.parse_args(argv)
+    every = commands()
+    unknown = [n for n in args.names if n not in every]
+    if unknown:
+        ap.error(f"unknown name(s) {', '.join(unknown)}; choose from {', '.join(every)}")
+    flower = [run_cold(FLOWER, args.timeout) for _ in range(max(args.flower_runs, 1))]
+    base = median([r["wall"] for r in flower])
+    print(f"{'double-flower':28s} {base:7.2f} s  1.0x  peak {max(r['peak_mb'] for r in flower):6.0f} MB  "
+          f"(median of {len(flower)}) {flower[-1]['verdict'][:70]}", flush=True)
+    rows = []
+    for name in args.names or list(every):
+        r = run_cold(every[name], args.timeout)
+        r.update(name=name, ratio=r["wall"] / base)
+        rows.append(r)
+        state = "TIMED OUT" if r["timed_out"] else f"exit {r['returncode']}"
+        print(f"{name:28s} {r['wall']:7.2f} s {r['ratio']:4.1f}x  peak {r['peak_mb']:6.0f} MB  {state}  "
+              f"{r['verdict'][:70]}", flush=True)
+    return {"flower": {"wall": [r["wall"] for r in flower], "wall_median": base,
+                       "peak_mb": max(r["peak_mb"] for r in flower), "returncodes": [r["returncode"] for r in flower]},
+            "rows": rows, "timeout": args.timeout}
+
+
+if __name__ == "__main__":
+    main()
