@@ -314,6 +314,33 @@ def test_a_linked_program_out_of_iterations_is_finished_from_its_last_iterate(mo
     assert chain.success and all(max(sec.residuals.values()) <= 1e-10 for sec in chain.sections)
 
 
+def test_a_larger_linked_program_gets_fewer_iterations(monkeypatch):
+    # issues 17 and 18: IPOPT's time an iteration grows with the program, and a drawing's big
+    # linked program crawls; its iterations are budgeted by its size
+    from skatetrace.planning import collocation, nlp, planner
+
+    base = collocation.ProgramOptions(M=0.6, m=0.4, I=0.5, reach=0.5)
+    assert base.iterations_for(10**6) == base.max_iter  # no budget: IPOPT's cap as given
+    linked = planner._linked_options(base)
+    assert linked.iterations_for(3000) == linked.iterations_for(5000) == planner._LINKED_ITER
+    assert linked.iterations_for(16190) == 46 and linked.iterations_for(10**6) == planner._LINKED_ITER // 4
+
+    seen = []
+    solve = nlp.SparseProgram.solve
+
+    def spy(self, options):
+        seen.append((options["ipopt.mu_init"], options["ipopt.max_iter"], self.n))
+        return solve(self, options)
+
+    monkeypatch.setattr(nlp.SparseProgram, "solve", spy)
+    monkeypatch.setattr(planner, "_LINKED_BUDGET", 40 * 1000)
+    plan_figure(st.school_figure("loop", height=1.7), options=st.TraceOptions(reach=0.5, speed=2.0, workers=1))
+    caps = [(cap, n) for mu, cap, n in seen if mu == planner._LINKED_MU]
+    assert caps and all(cap == min(150, max(37, 40_000 // n)) for cap, n in caps), caps
+    assert any(cap < 150 for cap, _n in caps)
+    assert all(cap == 500 for mu, cap, _n in seen if mu != planner._LINKED_MU)  # single sections: as before
+
+
 def test_a_program_too_large_to_build_is_refused_as_data(monkeypatch):
     """Issue 19: a line 1000 km long at --reach asked CasADi for 10^8 unknowns and died of bad_alloc
     after taking 5 GB; the program's size is now checked before anything is built."""

@@ -98,7 +98,10 @@ class ProgramOptions:
     ``interval_duration`` of it; ``min_speed`` is the floor of the blade's speed away from the
     rests; ``tol``, ``max_iter``, ``print_level``, ``barrier`` (IPOPT's ``mu_strategy``) and
     ``mu_init`` go to IPOPT (``max_iter`` 500: the linked programs that converged took at most 361
-    iterations, the single sections about 200, and a program that runs to 1000 costs minutes).
+    iterations, the single sections about 200, and a program that runs to 1000 costs minutes);
+    ``iteration_budget``, if given, caps the iterations at that many over the number of unknowns
+    (at least ``max_iter`` / 4, and never above ``max_iter``), as IPOPT's cost an iteration
+    grows with the program.
     """
 
     M: float
@@ -124,7 +127,14 @@ class ProgramOptions:
     barrier: str = "adaptive"
     mu_init: float = 0.1
     max_iter: int = 500
+    iteration_budget: int | None = None
     print_level: int = 0
+
+    def iterations_for(self, n: int) -> int:
+        """IPOPT's ``max_iter`` for a program of ``n`` unknowns (see ``iteration_budget``)."""
+        if self.iteration_budget is None:
+            return self.max_iter
+        return min(self.max_iter, max(self.max_iter // 4, self.iteration_budget // max(n, 1)))
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -376,7 +386,7 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     # the circle eight's warm start took 284 iterations, both programs 240 before).
     res = prog.solve({"print_time": False, "error_on_fail": False, "ipopt.print_level": o.print_level,
                       "ipopt.sb": "yes", "ipopt.mu_strategy": o.barrier, "ipopt.mu_init": o.mu_init,
-                      "ipopt.max_iter": o.max_iter, "ipopt.tol": o.tol})
+                      "ipopt.max_iter": o.iterations_for(n), "ipopt.tol": o.tol})
     ok, status = res.success, res.status
     message = status.replace("_", " ").lower()
     if not ok and status in _STALLED:
