@@ -1,5 +1,6 @@
 """The bounded-reach planner: its symbolic model, the exact finish, the reach bound and the replay."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -312,6 +313,31 @@ def test_a_linked_program_out_of_iterations_is_finished_from_its_last_iterate(mo
     chain = plan_figure(figure_from_dict(CUSPS["pivot"]), options=st.TraceOptions(reach=1.0))
     assert len(kept) == 2 and kept[1] is None
     assert chain.success and all(max(sec.residuals.values()) <= 1e-10 for sec in chain.sections)
+
+
+def test_a_chains_replan_solves_each_distinct_program_once_side_by_side(monkeypatch):
+    # feather-settings' chain of 39 sections was planned again section by section, one after
+    # another, 114 programs; the same program (pieces, pins, guess, mesh) is now solved once
+    from skatetrace.planning import planner
+    from skatetrace.planning.collocation import solve_program
+
+    fig = figure_from_dict({"schema": "skatetrace.figure/1",
+                            "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 198}]}]})
+    popts = planner._program_options(st.PAPER_PARAMS, st.TraceOptions(reach=1.0))
+    (spec,), _ = planner.curve_specs(fig.curves[0])
+    one = solve_program([spec], popts)
+    other = solve_program([spec], dataclasses.replace(popts, reach=0.9))
+    plan = planner._chain([one, other, one], "warm start")
+    batches = []
+    real = planner.solve_programs
+    monkeypatch.setattr(planner, "solve_programs", lambda jobs, workers=None: batches.append((len(jobs), workers))
+                        or real(jobs, workers))
+    again = planner._replan(plan, [spec] * 3, popts, ("start", "jump", "jump"), False, workers=2)
+    assert batches == [(2, 2)] and again.success and len(again.states) == 3
+    np.testing.assert_array_equal(again.states[0], again.states[2])
+    alone = solve_program([spec], dataclasses.replace(popts, mu_init=planner._LINKED_MU), guess=planner._section_of(plan, 1),
+                          meshes=plan.meshes[1:2])
+    np.testing.assert_array_equal(again.states[1], alone.states[0])  # the same program as solved on its own
 
 
 def test_a_larger_linked_program_gets_fewer_iterations(monkeypatch):
