@@ -383,6 +383,19 @@ def test_a_program_too_large_to_build_is_refused_as_data(monkeypatch):
     assert f"more than the {collocation.MAX_UNKNOWNS:,} allowed" in sec.message and "--reach none" in sec.message
 
 
+def test_a_section_of_hundreds_of_pieces_is_refused_for_its_pieces_before_anything_is_built():
+    # the serpentine in exact mode (313 spirals in one section, 33,691 unknowns) ran 500 IPOPT
+    # iterations in 6 minutes and failed; a program that large is refused at once, saying why
+    from skatetrace.planning import collocation, planner
+
+    popts = planner._program_options(st.PAPER_PARAMS, st.TraceOptions(reach=1.0))
+    pieces = tuple(collocation.PieceSpec((0.5 * (-1) ** k, 0.0, 0.0, 0.0), 0.01) for k in range(400))
+    spec = collocation.SectionSpec(pieces, 0.0, 1.25 * 4.0)
+    why = collocation.program_too_large([spec], popts)
+    assert why is not None and "its 400 pieces have at least 3 intervals each" in why and "--reach none" in why
+    assert collocation.program_too_large([collocation.SectionSpec(pieces[:100], 0.0, 1.25)], popts) is None
+
+
 def test_a_solver_that_stops_with_an_error_is_a_failed_program_not_a_crash(monkeypatch):
     """Issue 19: IPOPT out of memory (std::bad_alloc, raised by CasADi as RuntimeError) on a
     2,000-point zigzag drawing was a traceback after 12 s; it is a failed program, and the default

@@ -38,9 +38,13 @@ _STALLED = ("Error_In_Step_Computation", "Maximum_Iterations_Exceeded", "Restora
             "Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Level")
 _FEASIBLE = 1e-8
 #: The most unknowns a program may have. The school figures' largest has about 10,000, the corpus
-#: drawings' up to 40,000; measured, CasADi and IPOPT take about 40 kB each (a single section of
-#: 24,000 unknowns: 0.9 GB), so 60,000 stay within about 2.5 GB.
-MAX_UNKNOWNS = 60_000
+#: drawings' up to 35,000. Memory: CasADi and IPOPT take about 40 kB each (a single section of
+#: 24,000 unknowns: 0.9 GB). Time: IPOPT's iterations cost more as the program grows (45 ms at
+#: 4,500 unknowns, 250 ms at 16,000, 600 ms at 34,000), so a larger program takes minutes: the
+#: serpentine in exact mode (one section of 313 spirals, 33,691 unknowns) ran past 15 minutes, and
+#: feather-settings' curve of 34,722 spent 21 s failing. Such a figure is traced with the
+#: launch-glide-stop manoeuvres instead (the command line's default reach falls back to them).
+MAX_UNKNOWNS = 25_000
 
 
 def _radau() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -268,9 +272,11 @@ def _too_large(layout, n: int, o: ProgramOptions) -> str | None:
     if n <= MAX_UNKNOWNS:
         return None
     longest = max(duration for duration, *_ in layout)
-    return (f"the program would have {n:,} unknowns, more than the {MAX_UNKNOWNS:,} allowed (a section lasts "
-            f"{longest:.3g} of the planner's time units, at one mesh interval per {o.interval_duration:g}): trace "
-            "a figure this long with the launch-glide-stop manoeuvres (--reach none), or in parts")
+    pieces = sum(len(lays) for *_, lays in layout)
+    return (f"the program would have {n:,} unknowns, more than the {MAX_UNKNOWNS:,} allowed (its longest section "
+            f"lasts {longest:.3g} of the planner's time units, at one mesh interval per {o.interval_duration:g}, and "
+            f"its {pieces:,} pieces have at least 3 intervals each): trace a figure this long or this finely "
+            "pieced with the launch-glide-stop manoeuvres (--reach none), or in parts")
 
 
 def program_too_large(sections: list[SectionSpec], options: ProgramOptions) -> str | None:
