@@ -433,7 +433,6 @@ def _path_bounds(o: ProgramOptions, tc: np.ndarray, duration: float) -> tuple[tu
     negative in the exact motion, a stall. The floor rises from the rests to ``min_speed`` (2 %
     of the glide) over a tenth of the section, at the collocation points' guessed times.
     """
-    N = tc.shape[1]
     ramp = np.minimum(1.0, np.minimum(tc, duration - tc) / (0.1 * duration))
     out = [(np.maximum(0.0, o.min_speed * ramp), o.top_speed), (-np.inf, o.reach * o.reach)]
     for lo, hi, on in ((o.singular_clearance**2, np.inf, o.singular_clearance > 0.0),
