@@ -350,6 +350,8 @@ def test_a_larger_linked_program_gets_fewer_iterations(monkeypatch):
     linked = planner._linked_options(base)
     assert linked.iterations_for(3000) == linked.iterations_for(5000) == planner._LINKED_ITER
     assert linked.iterations_for(16190) == 46 and linked.iterations_for(10**6) == planner._LINKED_ITER // 4
+    section = planner._program_options(st.PAPER_PARAMS, st.TraceOptions(reach=0.5))
+    assert section.iterations_for(3364) == 500 and section.iterations_for(12000) == 166  # a section on its own
 
     seen = []
     solve = nlp.SparseProgram.solve
@@ -394,6 +396,22 @@ def test_a_section_of_hundreds_of_pieces_is_refused_for_its_pieces_before_anythi
     why = collocation.program_too_large([spec], popts)
     assert why is not None and "its 400 pieces have at least 3 intervals each" in why and "--reach none" in why
     assert collocation.program_too_large([collocation.SectionSpec(pieces[:100], 0.0, 1.25)], popts) is None
+
+
+def test_a_curve_with_a_section_too_large_to_plan_solves_no_program_at_all(monkeypatch):
+    # the three turn in exact mode spent 88 s on the warm starts of four sections beside its fifth,
+    # too large to plan, which made the curve unplannable anyway (398 s in all, now 8 s)
+    from skatetrace.planning import collocation
+
+    def no_solve(self, options):
+        raise AssertionError("no program of a curve that cannot be planned is solved")
+
+    monkeypatch.setattr(collocation.SparseProgram, "solve", no_solve)
+    figure = figure_from_dict(_cusp_figure({"type": "cusp", "pivot_deg": 30}, {"type": "line", "length": 1e6}))
+    trace = plan_figure(figure, figure.params, st.TraceOptions(reach=0.5, workers=1))
+    assert [sec.status for sec in trace.sections] == [st.TraceStatus.NOT_PLANNED] * 2
+    assert "section 1 of this curve cannot be planned" in trace.sections[0].message
+    assert "more than the 12,000 allowed" in trace.sections[1].message
 
 
 def test_a_solver_that_stops_with_an_error_is_a_failed_program_not_a_crash(monkeypatch):

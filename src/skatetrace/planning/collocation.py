@@ -37,14 +37,17 @@ _DEGREE = 3
 _STALLED = ("Error_In_Step_Computation", "Maximum_Iterations_Exceeded", "Restoration_Failed",
             "Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Level")
 _FEASIBLE = 1e-8
-#: The most unknowns a program may have. The school figures' largest has about 10,000, the corpus
-#: drawings' up to 35,000. Memory: CasADi and IPOPT take about 40 kB each (a single section of
-#: 24,000 unknowns: 0.9 GB). Time: IPOPT's iterations cost more as the program grows (45 ms at
-#: 4,500 unknowns, 250 ms at 16,000, 600 ms at 34,000), so a larger program takes minutes: the
-#: serpentine in exact mode (one section of 313 spirals, 33,691 unknowns) ran past 15 minutes, and
-#: feather-settings' curve of 34,722 spent 21 s failing. Such a figure is traced with the
-#: launch-glide-stop manoeuvres instead (the command line's default reach falls back to them).
-MAX_UNKNOWNS = 25_000
+#: The most unknowns a program may have. The school figures' largest curve has 10,096 (the
+#: paragraph double three, solved as its unit of 5,048), the corpus drawings' up to 35,000.
+#: Memory: CasADi and IPOPT take about 40 kB each (a single section of 24,000 unknowns: 0.9 GB).
+#: Time: IPOPT's iterations cost more as the program grows (45 ms at 4,500 unknowns, 250 ms at
+#: 16,000, 600 ms at 34,000), so a larger program takes minutes: the serpentine in exact mode (one
+#: section of 313 spirals, 33,691 unknowns) ran past 15 minutes, the three turn in exact mode (a
+#: section of 136 spirals, 14,677) took 398 s, and feather-settings' curve of 34,722 spent 21 s
+#: failing. A section that large is traced with the launch-glide-stop manoeuvres instead (the
+#: command line's default reach falls back to them); a curve that large is not linked (its
+#: chain of sections is the plan).
+MAX_UNKNOWNS = 12_000
 
 
 def _radau() -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -99,8 +99,14 @@ def _program_options(params: SleighParams, options: TraceOptions) -> ProgramOpti
         # the effort (312 m/s^2, 6.4 kN in the exact motion, against 42 m/s^2 with the penalty).
         singular_clearance=0.15 * options.reach, continuous_velocity=False,
         impulse_time=IMPULSE_TIME * options.speed, tol=1e-6,  # in the program's time, a glide at speed 1
-        top_speed=TOP_SPEED,
+        top_speed=TOP_SPEED, iteration_budget=_SECTION_BUDGET,
     )
+
+
+#: A section planned on its own gets at most this many IPOPT iterations over its unknowns (and at
+#: most 500): the school figures' sections (at most 3,364 unknowns) keep their 500; a drawing's
+#: section of 12,000 gets 166 (at some 0.2 s each), where 500 took minutes.
+_SECTION_BUDGET = 2_000_000
 
 
 def _rates(fn, X, spec: SectionSpec, at_end: bool):
@@ -159,10 +165,14 @@ def _presolved(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: 
     """The pinned warm-start programs of every curve (:func:`_warm_start`), each distinct one solved once.
 
     Solved side by side (:func:`~skatetrace.planning.pool.solve_programs`); returns the cache
-    :func:`_warm_start` fills, keyed like it.
+    :func:`_warm_start` fills, keyed like it. A curve with a section too large to plan
+    (:func:`~skatetrace.planning.collocation.program_too_large`) is left out: the three turn in
+    exact mode spent 88 s on the programs of four sections beside its fifth, refused.
     """
     jobs: dict = {}
     for specs, popts in curves:
+        if any(program_too_large([spec], popts) for spec in specs):
+            continue  # the curve cannot be planned (:func:`_warm_start` stops at that section): nothing to solve
         for spec, (start, end) in zip(specs, _cusp_pins(specs, popts.reach, popts.closing_turn)):
             key, sign = _warm_key(spec, start, end, popts.reach)
             if key not in jobs:
@@ -196,6 +206,9 @@ def _warm_start(specs, popts: ProgramOptions, solved: dict | None = None
         sol, solved_sign = solved[key]
         return sol if sign == solved_sign or not sol.success else _mirrored(sol)
 
+    large = next((k for k, spec in enumerate(specs) if program_too_large([spec], popts)), None)
+    if large is not None:
+        return None, large, ()
     sols, pinned = [], []
     for k, (spec, (start, end)) in enumerate(zip(specs, _cusp_pins(specs, popts.reach, popts.closing_turn))):
         sol, on_pins = solve(spec, start, end), True
