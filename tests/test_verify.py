@@ -147,3 +147,27 @@ def test_the_replay_of_a_long_figure_is_bounded():
     rep = done.report.replay
     chunks = np.count_nonzero(np.diff(rep.t) == 0.0) + 1
     assert rep.t.size <= verify_module.MAX_REPLAY_SAMPLES + 50 * chunks
+
+
+def test_a_replay_that_turns_nan_fails_its_section_instead_of_crashing_the_measurement(monkeypatch):
+    # Issue 19, item 4, found again on a planned drawing (lucide-safari-pinned-tab at 6 m under the
+    # default reach): the distance search (cKDTree) refused the NaN rows with "'x' must be finite"
+    # before the verification's own check; such a section is measured as infinitely far, and fails
+    import skatetrace as st
+
+    trace = st.trace_figure(st.pattern("double-flower"), st.PAPER_PARAMS)
+    real = verify_module.replay
+
+    def nan_in_section_1(trace, schedule):
+        rep = real(trace, schedule)
+        rows = np.flatnonzero(rep.section == 1)
+        state = rep.state.copy()
+        state[:, rows[rows.size // 2:]] = np.nan
+        return verify_module.Replay(t=rep.t, state=state, controls=rep.controls, section=rep.section, piece=rep.piece)
+
+    monkeypatch.setattr(verify_module, "replay", nan_in_section_1)
+    report = verify_module.verify(trace)
+    assert not report.success
+    bad = [s for s in report.sections if not s["passed"]]
+    assert bad and bad[0]["section"] == 1 and bad[0]["max_deviation_replay_to_figure"] == float("inf")
+    assert report.sections[0]["passed"]

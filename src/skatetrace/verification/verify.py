@@ -389,11 +389,14 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
         sub = rep.take(idx)
         sxi1, sxi2 = xi1[idx], xi2[idx]
         pts = sub.state[3:5]
+        finite = bool(np.all(np.isfinite(sub.state)))
         # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
         samples = [segment_points(p.start, p.segment, 65) for p in sec.section.pieces]
-        d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0]
-        d_from = np.zeros(0)
-        for p, xy in zip(sec.section.pieces, samples):
+        # a replay that turned NaN or infinite is measured as infinitely far (the distance searches
+        # refuse non-finite points: a planned drawing's replay crashed the verification there)
+        d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0] if finite else np.array([math.inf])
+        d_from = np.zeros(0) if finite else np.array([math.inf])
+        for p, xy in zip(sec.section.pieces, samples if finite else ()):
             d_to = _nearer(d_to, pts, p, xy)
             n = max(64, int(p.segment.length * density))
             # Each piece's points are matched with the stretch of replay labelled with that piece
@@ -413,7 +416,7 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
         mass_speed = np.hypot(sxi2 - sxi1 * b + ad, sxi1 * a + bd)
         speed_scale = max(trace.options.speed, float(np.max(np.abs(sxi2))), float(np.max(mass_speed)))
         cusp_limit = 1e-8 * speed_scale
-        dev = max(float(d_to.max()), float(d_from.max())) if np.all(np.isfinite(sub.state)) else math.inf
+        dev = max(float(d_to.max()), float(d_from.max())) if finite else math.inf
         record = {
             "section": si, "traced": True, "pieces": [p.index for p in sec.section.pieces],
             "max_deviation_replay_to_figure": float(d_to.max()),
