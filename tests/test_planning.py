@@ -446,3 +446,17 @@ def test_the_size_check_passes_every_school_figure():
         for curve in figure.curves:
             specs, _ = curve_specs(curve)
             assert program_too_large(specs, popts) is None
+
+
+def test_an_interval_whose_integration_diverged_is_split_the_most_not_a_crash():
+    # found by the corpus under the default reach (vivus-hi-there): an infinite defect raised
+    # OverflowError in the mesh refinement (ceil of infinity)
+    from skatetrace.planning.collocation import ProgramSolution
+    from skatetrace.planning.mesh import _MAX_PARTS, refined
+
+    nodes = np.array([0.0, 0.5, 1.0])
+    sol = ProgramSolution(success=True, status="x", message="x", times=(nodes.copy(),),
+                          states=(np.vstack([nodes] * 6),), controls=(np.zeros(2),), meshes=((nodes,),))
+    meshes, guess, n_split = refined(sol, [np.array([math.inf, 1e-12])], 1e-5)
+    assert n_split == 1 and meshes[0][0].size == 3 + _MAX_PARTS - 1
+    assert np.all(np.isfinite(guess.states[0])) and guess.times[0].size == meshes[0][0].size

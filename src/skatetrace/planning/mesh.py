@@ -66,8 +66,11 @@ def refined(sol: ProgramSolution, errors: list[np.ndarray], tol: float):
             for q in range(N):
                 k = i + q
                 if err[k] > tol:
-                    # the defect falls like h^5 (Radau, degree 3): enough pieces to meet tol at once
-                    parts = int(min(_MAX_PARTS, max(2, math.ceil((err[k] / tol) ** 0.2))))
+                    # the defect falls like h^5 (Radau, degree 3): enough pieces to meet tol at once;
+                    # an integration that diverged over the interval (an infinite defect: a planned
+                    # drawing's, vivus-hi-there at 6 m) gets the most
+                    ratio = err[k] / tol
+                    parts = _MAX_PARTS if not math.isfinite(ratio) else int(min(_MAX_PARTS, max(2, math.ceil(ratio ** 0.2))))
                     n_split += 1
                     for f in np.arange(1, parts) / parts:
                         new_nodes.append(nodes[q] + f * (nodes[q + 1] - nodes[q]))
