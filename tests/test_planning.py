@@ -460,3 +460,27 @@ def test_an_interval_whose_integration_diverged_is_split_the_most_not_a_crash():
     meshes, guess, n_split = refined(sol, [np.array([math.inf, 1e-12])], 1e-5)
     assert n_split == 1 and meshes[0][0].size == 3 + _MAX_PARTS - 1
     assert np.all(np.isfinite(guess.states[0])) and guess.times[0].size == meshes[0][0].size
+
+
+def test_an_error_in_finishing_a_curve_is_that_curves_failure_not_the_runs(monkeypatch):
+    # a corpus drawing crashed the whole run from inside the planner (an infinite defect in the mesh
+    # refinement); whatever arithmetic error a curve's finish meets is reported on its sections
+    from skatetrace.planning import planner
+
+    real = planner._mended
+    calls = []
+
+    def broken_first(plan, links, linked, specs, sections, ci, *args):
+        calls.append(ci)
+        if ci == 0:
+            raise OverflowError("cannot convert float infinity to integer")
+        return real(plan, links, linked, specs, sections, ci, *args)
+
+    monkeypatch.setattr(planner, "_mended", broken_first)
+    arc = {"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 90}]}
+    figure = figure_from_dict({"curves": [arc, arc], "params": {"M": 2, "m": 1, "I": 3}})
+    trace = plan_figure(figure, figure.params, st.TraceOptions(reach=1.0, workers=1))
+    first, second = trace.sections
+    assert calls == [0, 1] and first.status is st.TraceStatus.NOT_PLANNED and not first.phases
+    assert "the planner failed on this curve (OverflowError: cannot convert" in first.message
+    assert second.success and max(second.residuals.values()) <= 1e-10

@@ -494,12 +494,22 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
         curves.append((specs, sections, dataclasses.replace(popts, closing_turn=_closing_turn(curve, sections))))
     plans = _plan_curves([(specs, curve_opts) for specs, _sections, curve_opts in curves], options.workers)
     for ci, ((specs, sections, curve_opts), (plan, bad, links, linked, candidate)) in enumerate(zip(curves, plans)):
-        if plan is None:
-            curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
-        else:
-            curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params, options, fn)
-            if curve_traces is None:
-                curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
+        try:
+            if plan is None:
+                curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
+            else:
+                curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params,
+                                                                           options, fn)
+                if curve_traces is None:
+                    curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+            # A plan whose exact motion diverges can reach numbers that the finish or the mesh
+            # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
+            # the default reach, vivus-hi-there). The curve is reported as not planned, with the
+            # error, and the other curves are still planned (the command line then falls back to
+            # the launch-glide-stop manoeuvres), instead of the whole run ending in a traceback.
+            why = f"reach {options.reach:.4g}: the planner failed on this curve ({type(exc).__name__}: {exc})"
+            curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, why) for sec in sections]
         for tr in curve_traces:
             traces.append(tr)
             starts.append(t)
