@@ -546,8 +546,8 @@ def write_markdown(path: Path, res: dict, meta: dict) -> None:
               "Each command as a user runs it (`skatetrace trace ... --no-plots --no-viewer`, the default "
               "planner), in a fresh interpreter, in this order in one sitting; the ratio is to the double "
               f"flower's median cold time ({cold['flower']['wall_median']:.2f} s, runs "
-              f"{', '.join(f'{w:.2f}' for w in cold['flower']['wall'])} s). Peak memory: `ru_maxrss` as `wait4` "
-              "reports it.", ""]
+              f"{', '.join(f'{w:.2f}' for w in cold['flower']['wall'])} s). Peak memory: `VmHWM` of the command's main "
+              "process, read every 20 ms (its worker processes not counted).", ""]
         L += _table(["command", "wall s", "x flower", "exit", "peak MB", "verdict"],
                     [[" ".join(r["args"]), f"{r['wall']:.1f}", f"{r['ratio']:.1f}",
                       "stopped" if r["timed_out"] else r["returncode"], f"{r['peak_mb']:.0f}", r["verdict"][:90].replace("|", "/")]
