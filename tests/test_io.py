@@ -1,8 +1,10 @@
 import os
+from pathlib import Path
+from unittest import mock
 
 import pytest
 
-from skatetrace.outputs.files import atomic_write
+from skatetrace.outputs.files import atomic_write, staged
 
 
 def test_atomic_write_replaces_whole_file(tmp_path):
@@ -74,7 +76,8 @@ import sys
 import numpy as np
 
 from skatetrace.errors import SkatetraceError
-from skatetrace.outputs.folder import MANIFEST, OutputFolder, adopt, check_output_file, check_output_folder
+from skatetrace.outputs.folder import (MANIFEST, STAGING_PREFIX, OutputFolder, adopt, check_output_file,
+                                       check_output_folder)
 from skatetrace.outputs.files import dumps_json, file_mode, write_atomically
 
 
@@ -226,15 +229,47 @@ def test_output_folder_removes_only_its_own_stale_files(tmp_path):
     assert (tmp_path / "elsewhere.txt").exists()
 
 
-def test_interrupted_run_keeps_its_files_known(tmp_path):
+def test_a_run_stopped_before_it_finishes_leaves_the_earlier_run_as_it_was(tmp_path):
     out = tmp_path / "out"
-    with OutputFolder(out, "trace"):
+    with OutputFolder(out, "trace") as first:
         atomic_write(out / "a.png", "1")
-    # no finish(): as if interrupted. The next run still owns a.png and removes it.
-    nxt = OutputFolder(out, "trace")
-    with nxt:
+        atomic_write(out / "result.json", "first")
+        assert not (out / "a.png").exists()  # staged until the run is over
+        assert staged(out / "a.png").read_text() == "1"
+    first.finish()
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "a.png", "result.json"]  # no staging left
+    stopped = OutputFolder(out, "trace")
+    with stopped:  # writes two files, then is stopped: no finish()
+        atomic_write(out / "result.json", "second")
         atomic_write(out / "b.png", "2")
-    assert nxt.finish() == ["a.png"]
+    # what a killed process leaves: its staging folder, with its files in it
+    leftover = [p for p in out.iterdir() if p.name.startswith(STAGING_PREFIX)]
+    assert len(leftover) == 1 and (leftover[0] / "b.png").exists()
+    stopped._unlock()
+    stopped._staging = None  # as if killed: nothing cleaned up
+    assert (out / "result.json").read_text() == "first" and not (out / "b.png").exists()
+    assert strict_loads((out / MANIFEST).read_text()) == {**strict_loads((out / MANIFEST).read_text()),
+                                                          "complete": True, "files": ["a.png", "result.json"]}
+    nxt = OutputFolder(out, "trace")  # the next run removes the killed run's staging folder
+    assert not leftover[0].exists()
+    with nxt:
+        atomic_write(out / "c.png", "3")
+    assert nxt.finish() == ["a.png", "result.json"]
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "c.png"]
+
+
+def test_staged_writes_go_only_where_the_folder_is(tmp_path):
+    out = tmp_path / "out"
+    run = OutputFolder(out, "trace")
+    with run:
+        atomic_write(tmp_path / "beside.txt", "not the run's")
+        atomic_write(out / "figures" / "main-1.png", "x")
+        assert (tmp_path / "beside.txt").read_text() == "not the run's"
+        assert staged(tmp_path / "beside.txt") == tmp_path / "beside.txt"
+        assert not (out / "figures").exists()
+    assert run.finish() == []
+    assert (out / "figures" / "main-1.png").read_text() == "x"
+    assert strict_loads((out / MANIFEST).read_text())["files"] == ["figures/main-1.png"]
 
 
 def test_a_run_that_wrote_nothing_removes_nothing(tmp_path):
@@ -312,9 +347,21 @@ def test_a_folder_whose_run_did_not_finish_is_refused_by_its_readers(tmp_path, c
     check_finished(out)  # a finished run passes
     assert strict_loads((out / MANIFEST).read_text())["complete"] is True
     run = OutputFolder(out, "trace")
-    with run:  # a second run writes one file, then dies before finish()
-        atomic_write(out / "result.json", (out / "result.json").read_text())
+    with run:  # a second run writes two files, then dies while moving them into place
+        atomic_write(out / "result.json", (out / "result.json").read_text() + " ")
+        atomic_write(out / "controls.csv", "t\n")
+    real_replace = os.replace
+
+    def killed_after_one(src, dst):
+        if Path(dst).name == "controls.csv":
+            raise KeyboardInterrupt  # the kill, between the two moves
+        real_replace(src, dst)
+
+    with mock.patch("skatetrace.outputs.folder.os.replace", killed_after_one), pytest.raises(KeyboardInterrupt):
+        run.finish()
     assert strict_loads((out / MANIFEST).read_text())["complete"] is False
+    # the new result beside the old controls
+    assert (out / "result.json").read_text().endswith(" ") and (out / "controls.csv").read_text() != "t\n"
     del run
     with pytest.raises(SkatetraceError, match="did not finish writing"):
         check_finished(out / "result.json")
@@ -327,3 +374,56 @@ def test_a_folder_whose_run_did_not_finish_is_refused_by_its_readers(tmp_path, c
     assert main(["trace", "circle", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
     check_finished(out)  # the next finished run makes it one run's again
     assert main(["view", str(out)]) == 0
+
+
+def _one_run(out, started):
+    """The folder's files (beside the manifest and staging), checked to be one run's: the manifest's list,
+    and all written before ``started`` (the earlier run) or all after it (the killed one)."""
+    manifest = strict_loads((out / MANIFEST).read_text())
+    names = sorted(p.name for p in out.iterdir() if p.name != MANIFEST and not p.name.startswith(STAGING_PREFIX))
+    assert manifest["complete"] is True and names == manifest["files"], (names, manifest)
+    newer = {(out / n).stat().st_mtime_ns >= started for n in names}
+    assert len(newer) == 1, f"files of two runs side by side: {names}"
+    return newer.pop()
+
+
+def _written_since(out, started):
+    """Whether a file under ``out`` (its staging folder included) was written at or after ``started``."""
+    for p in out.rglob("*"):
+        try:
+            if p.is_file() and p.stat().st_mtime_ns >= started:
+                return True
+        except OSError:  # moved or removed meanwhile
+            pass
+    return False
+
+
+@pytest.mark.slow
+def test_a_killed_run_never_leaves_a_folder_of_two_runs(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from skatetrace.cli import main
+
+    out = tmp_path / "out"
+    argv = ["trace", "line", "--out", str(out), "--no-plots", "--no-viewer"]
+    for delay in (None, 0.5, 1.5, 3.0):  # None: killed as soon as its first file is written
+        assert main(["trace", "circle", "--out", str(out)]) == 0  # the earlier run: plots and viewer too
+        time.sleep(0.01)
+        started = time.time_ns()
+        proc = subprocess.Popen([sys.executable, "-m", "skatetrace", *argv], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        t0 = time.monotonic()
+        while proc.poll() is None and time.monotonic() - t0 < (60 if delay is None else delay):
+            if delay is None and _written_since(out, started):
+                break
+            time.sleep(0.002)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        _one_run(out, started)  # the earlier run's files as they were, or (killed too late) the new run's
+        if delay is None:
+            assert main(["view", str(out)]) == 0
+    assert main(argv) == 0 and _one_run(out, started)  # the next run cleans up and is whole
+    assert not list(out.glob(STAGING_PREFIX + "*"))

@@ -395,10 +395,12 @@ def _trace(args) -> int:
     if not args.no_viewer and schedule.t.size < 2:
         print("note: viewer.html not written: no section could be traced, so there is nothing to play")
     elif not args.no_viewer:
+        from ..outputs.files import staged
         from ..outputs.playback import load_playback
         from ..outputs.viewer import write_viewer
 
-        write_viewer(load_playback(out), out / "viewer.html")
+        # this run's result.json, where it is until the run's files are moved in together
+        write_viewer(load_playback(staged(out / "result.json")), out / "viewer.html")
     elapsed = time.perf_counter() - t0
     unit = "m" if res.unit == "m" else "model units"
     print(f"figure {figure.name}: {len(figure.curves)} curve(s), {len(trace.sections)} section(s), "
@@ -742,8 +744,14 @@ def main(argv: list[str] | None = None) -> int:
         try:
             with folder:
                 code = _run(args)
+        except Exception:
+            if folder.written:
+                _finish_folder(folder)  # what the run wrote before its error, as one run's files
+            else:
+                folder.discard()  # the folders the check created, if nothing was written into them
+            raise
         except BaseException:
-            folder.discard()  # the folders the check created, if nothing was written into them
+            folder.discard()  # interrupted: the earlier run's files stay as they were
             raise
         _finish_folder(folder)
         return code

@@ -9,6 +9,9 @@ the bare ``NaN`` that JSON parsers other than Python's reject.
 
 Whoever needs to know which files a run wrote (an :class:`~skatetrace.outputs.folder.OutputFolder`)
 registers a callback with :func:`record_writes`; every atomic write calls it with the path written.
+Whoever wants a run's files kept aside until the run is over (the same folder, to swap a run's files
+in together) registers with :func:`stage_writes` where each file goes meanwhile; :func:`staged`
+then tells where a file just written can be read.
 """
 
 from __future__ import annotations
@@ -25,11 +28,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["atomic_write", "write_atomically", "dumps_json", "json_safe", "file_mode", "record_writes"]
+__all__ = ["atomic_write", "write_atomically", "dumps_json", "json_safe", "file_mode", "record_writes",
+           "stage_writes", "staged"]
 
 # The callbacks told of every file written atomically (see record_writes), innermost last.
 _RECORDERS: contextvars.ContextVar[tuple[Callable[[Path], None], ...]] = contextvars.ContextVar(
     "_RECORDERS", default=())
+# Where files are written meanwhile (see stage_writes), innermost last.
+_STAGES: contextvars.ContextVar[tuple[Callable[[Path], Path | None], ...]] = contextvars.ContextVar(
+    "_STAGES", default=())
 
 
 @contextlib.contextmanager
@@ -44,6 +51,40 @@ def record_writes(recorder: Callable[[Path], None]) -> Iterator[None]:
         yield
     finally:
         _RECORDERS.reset(token)
+
+
+@contextlib.contextmanager
+def stage_writes(stage: Callable[[Path], Path | None]) -> Iterator[None]:
+    """Within the ``with`` block, :func:`write_atomically` writes ``path`` to ``stage(path)`` instead.
+
+    ``stage`` returns None for a path it does not take (written where named). Recorders
+    (:func:`record_writes`) are still told the path named, not the staged one. Blocks nest (the
+    innermost that takes a path wins); the registration is per thread and per task.
+    """
+    token = _STAGES.set((*_STAGES.get(), stage))
+    try:
+        yield
+    finally:
+        _STAGES.reset(token)
+
+
+def _target(path: Path) -> Path:
+    for stage in reversed(_STAGES.get()):
+        where = stage(path)
+        if where is not None:
+            return Path(where)
+    return path
+
+
+def staged(path: str | Path) -> Path:
+    """Where the file written as ``path`` can be read now: its staged copy if it has one, else ``path``.
+
+    For a command that reads back a file it wrote in the same run (the viewer reads ``result.json``
+    and ``controls.csv``) while :func:`stage_writes` keeps the run's files aside.
+    """
+    path = Path(path)
+    where = _target(path)
+    return where if where != path and os.path.lexists(where) else path
 
 
 def _umask() -> int:
@@ -72,15 +113,17 @@ def write_atomically(path: str | Path, write: Callable[[Path], None]) -> None:
     The temporary name keeps ``path``'s suffix (writers that choose a format by it still can). On
     any failure, an interrupt included, the temporary file is removed and ``path`` is untouched.
     The file ends with the permissions of :func:`file_mode` (the temporary file is created ``0600``).
+    Within :func:`stage_writes` the file goes where the stage says instead.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix.lower()}", dir=path.parent)
+    target = _target(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix.lower()}", dir=target.parent)
     os.close(fd)
     try:
         write(Path(tmp))
         os.chmod(tmp, file_mode())
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

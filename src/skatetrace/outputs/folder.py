@@ -1,9 +1,11 @@
 """Output folders: checked before any work, and holding one run's files at a time.
 
 An output folder (:class:`OutputFolder`) is checked before any work and keeps a manifest,
-``.skatetrace-manifest.json``, of the files skatetrace wrote there; a later run into the same folder
-removes the files of that list it does not write again, so a folder never mixes two runs' files.
-Files skatetrace did not write are never touched.
+``.skatetrace-manifest.json``, of the files skatetrace wrote there. A run's files are written into a
+staging folder inside it and moved into place together when the run is over, and the files of the
+manifest the run did not write again are removed then: a folder never mixes two runs' files, and a
+run killed on the way leaves the earlier run's files as they were. Files skatetrace did not write
+are never touched.
 """
 
 from __future__ import annotations
@@ -12,19 +14,22 @@ import contextlib
 import errno
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path, PurePosixPath
 from typing import Any
 
 from ..errors import SkatetraceError
-from .files import atomic_write, dumps_json, record_writes
+from .files import atomic_write, dumps_json, record_writes, stage_writes
 
-__all__ = ["MANIFEST", "check_finished", "check_output_folder", "check_output_file", "output_path", "OutputFolder",
+__all__ = ["MANIFEST", "STAGING_PREFIX", "check_finished", "check_output_folder", "check_output_file", "output_path", "OutputFolder",
            "adopt"]
 
 #: The list of files skatetrace wrote into an output folder (see :class:`OutputFolder`).
 MANIFEST = ".skatetrace-manifest.json"
 _MANIFEST_SCHEMA = "skatetrace.manifest/1"
+#: The name of a run's staging folder inside its output folder starts with this.
+STAGING_PREFIX = ".skatetrace-run."
 
 
 
@@ -209,10 +214,21 @@ def _write_manifest(folder: Path, command: str | None, files, complete: bool = T
         "schema": _MANIFEST_SCHEMA, "command": command,
         "note": "files skatetrace wrote here; the next run into this folder removes those it does not write again",
         "files": sorted(set(files)),
-        # False from a run's first file to its end: a run killed on the way leaves it so, and
-        # the commands that read the folder refuse its mix of two runs' files
+        # False while a run's files are moved into place: a run killed in that instant leaves it
+        # so, and the commands that read the folder refuse its mix of two runs' files
         "complete": complete,
     }) + "\n")
+
+
+def _remove_staging(folder: Path) -> None:
+    """Remove the staging folders of runs that were killed (and so never moved their files in)."""
+    try:
+        leftovers = [p for p in folder.iterdir() if p.name.startswith(STAGING_PREFIX)]
+    except OSError:
+        return
+    for p in leftovers:
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
 
 
 def check_finished(folder: str | Path) -> None:
@@ -299,14 +315,16 @@ class OutputFolder:
     (:data:`MANIFEST`; for a folder written before manifests existed, the names a trace, fit or
     reproduction writes, if its ``result.json``, ``fit.json`` or ``reproduction.json`` is
     skatetrace's). Within ``with folder:`` every file written through :func:`write_atomically` under
-    the folder is recorded (and added to the manifest at once, so an interrupted run's files stay
-    known); :meth:`finish` then removes the owned files this run did not write and leaves the
-    manifest listing exactly this run's files. Other files (a user's notes) are never touched.
+    the folder goes into a staging folder inside it (:data:`STAGING_PREFIX`; :func:`staged` tells
+    where a file just written can be read back) and is recorded. :meth:`finish` then moves the run's
+    files into place, removes the owned files this run did not write, and leaves the manifest
+    listing exactly this run's files. Other files (a user's notes) are never touched.
 
-    From its first file to :meth:`finish` the manifest says ``"complete": false``: a run killed on
-    the way leaves a folder that :func:`check_finished` (and so ``view``, ``animate`` and
-    ``robustness``) refuses. The folder is locked from the check to :meth:`finish` or
-    :meth:`discard` (or the process's end): a second run into it is refused at once.
+    A run killed before :meth:`finish` leaves the earlier run's files as they were (its staging
+    folder is removed by the next run). While :meth:`finish` moves the files, the manifest says
+    ``"complete": false``: a run killed in that instant leaves a folder that :func:`check_finished`
+    (and so ``view``, ``animate`` and ``robustness``) refuses. The folder is locked from the check
+    to :meth:`finish` or :meth:`discard` (or the process's end): a second run into it is refused at once.
 
     Parameters
     ----------
@@ -339,13 +357,17 @@ class OutputFolder:
             _remove_created(self.created)
             raise
         self._abs = Path(os.path.abspath(self.path))
+        if self._lock is not None:  # no other run is writing here: a staging folder left is a killed run's
+            _remove_staging(self.path)
         manifest = _read_manifest(self.path)
         self.before: tuple[str, ...] = tuple(manifest["files"] if manifest is not None else _legacy_files(self.path))
         self.written: list[str] = []
+        self._staging: Path | None = None
         self._recording: list[contextlib.ExitStack] = []
 
     def __enter__(self) -> "OutputFolder":
         stack = contextlib.ExitStack()
+        stack.enter_context(stage_writes(self._stage))
         stack.enter_context(record_writes(self._record))
         self._recording.append(stack)
         return self
@@ -353,23 +375,49 @@ class OutputFolder:
     def __exit__(self, *exc) -> None:
         self._recording.pop().close()
 
+    def _stage(self, path: Path) -> Path | None:
+        """Where this run writes the file ``path`` until :meth:`finish` (None: not in the folder)."""
+        rel = _relative(self._abs, path)
+        if rel is None or rel == MANIFEST or rel.split("/")[0].startswith(STAGING_PREFIX):
+            return None
+        if self._staging is None:
+            self._staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.path))
+        return self._staging / rel
+
     def _record(self, path: Path) -> None:
         rel = _relative(self._abs, path)
-        if rel is None or rel == MANIFEST or rel in self.written:
+        if rel is not None and rel != MANIFEST and rel not in self.written:
+            self.written.append(rel)
+
+    def _move_in(self) -> None:
+        """Move the staged files into place (the manifest says ``"complete": false`` meanwhile)."""
+        if self._staging is None:
             return
-        first = not self.written
-        self.written.append(rel)
-        if first or rel not in self.before:
-            _write_manifest(self.path, self.command, [*self.before, *self.written], complete=False)
+        _write_manifest(self.path, self.command, [*self.before, *self.written], complete=False)
+        for rel in self.written:
+            src = self._staging / rel
+            if src.is_file():
+                (self.path / rel).parent.mkdir(parents=True, exist_ok=True)
+                os.replace(src, self.path / rel)
+
+    def _drop_staging(self) -> None:
+        if self._staging is not None:
+            shutil.rmtree(self._staging, ignore_errors=True)
+            self._staging = None
 
     def finish(self) -> list[str]:
-        """Remove the owned files this run did not write; list this run's files in the manifest.
+        """Move this run's files into place, remove the owned files it did not write, and list its files.
 
         Returns the names removed (relative to the folder). A run that wrote nothing changes nothing.
         """
         if not self.written:
+            self._drop_staging()
             self._unlock()
             return []
+        try:
+            self._move_in()
+        finally:
+            self._drop_staging()
         removed = []
         for rel in sorted(set(self.before) - set(self.written)):
             p = self.path / rel
@@ -399,11 +447,17 @@ class OutputFolder:
         return removed
 
     def discard(self) -> None:
-        """Remove the folders the check created, if still empty (a run that failed before writing)."""
+        """Drop this run's staged files and remove the folders the check created, if still empty.
+
+        For a run stopped on the way (Ctrl-C): the folder keeps the earlier run's files as they were.
+        """
+        self._drop_staging()
         self._unlock()
         _remove_created(self.created)
 
     def __del__(self) -> None:  # a folder object let go of without finish() (a test, a caller's error)
+        if getattr(self, "_staging", None) is not None:
+            self._drop_staging()
         self._unlock()
 
     def _unlock(self) -> None:

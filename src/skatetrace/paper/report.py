@@ -37,7 +37,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..dynamics.model import SleighParams
-from ..outputs.files import atomic_write
+from ..outputs.files import atomic_write, staged
 from ..tracing.sections import TraceOptions
 from .conditioning import (Conditioning, Perturbation, Spread, condition_cost, condition_exact_arc,
                            condition_paper_arc, perturbations)
@@ -505,7 +505,7 @@ def _html(blocks: list[tuple]) -> str:
             out.append("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>" + "".join(
                 "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows) + "</table>")
         elif kind == "img":
-            data = base64.b64encode(Path(blk[1]).read_bytes()).decode("ascii")
+            data = base64.b64encode(staged(blk[1]).read_bytes()).decode("ascii")
             out.append(f"<figure><img alt='{html.escape(blk[1].stem)}' src='data:image/png;base64,{data}'>"
                        f"<figcaption>{html.escape(blk[1].name)}</figcaption></figure>")
     out.append("</body></html>")
