@@ -12,6 +12,7 @@ return arrays of shape ``(2, len(t))``.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
@@ -258,9 +259,15 @@ def curvature(piece: Piece, t) -> np.ndarray:
     return np.where(sp > 0, k, np.nan)
 
 
+@functools.lru_cache(maxsize=8)
+def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights on ``n`` nodes (an eigenvalue problem: ~1 ms at 64, so kept)."""
+    return np.polynomial.legendre.leggauss(n)
+
+
 def piece_length(piece: Piece, t0: float = 0.0, t1: float = 1.0, n: int = 64) -> float:
     """Arc length between ``t0`` and ``t1`` by Gauss-Legendre quadrature on ``n`` nodes."""
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = _gauss_legendre(n)
     t = 0.5 * (t1 - t0) * x + 0.5 * (t1 + t0)
     d = piece.d1(t)
     return float(0.5 * (t1 - t0) * np.sum(w * np.hypot(d[0], d[1])))
