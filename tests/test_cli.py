@@ -519,8 +519,10 @@ def test_trace_reach_plans_within_it_and_reports_the_cusps(tmp_path, capsys):
     out = tmp_path / "o"
     assert main(["trace", str(_arc_file(tmp_path)), "--reach", "1", "--out", str(out), "--no-plots",
                  "--no-viewer"]) == 0
-    printed = capsys.readouterr().out
+    cap = capsys.readouterr()
+    printed = cap.out
     assert "planning the mass's motion within 1 model units" in printed and "reach" in printed
+    assert "planning: warm starts solved 1/1\n" in cap.err  # the planner's progress, batch by batch
     result = json.loads((out / "result.json").read_text())
     assert result["options"]["reach"] == 1.0
     rows = list(csv.DictReader((out / "controls.csv").open()))

@@ -330,14 +330,32 @@ def test_a_chains_replan_solves_each_distinct_program_once_side_by_side(monkeypa
     plan = planner._chain([one, other, one], "warm start")
     batches = []
     real = planner.solve_programs
-    monkeypatch.setattr(planner, "solve_programs", lambda jobs, workers=None: batches.append((len(jobs), workers))
-                        or real(jobs, workers))
+    monkeypatch.setattr(planner, "solve_programs", lambda jobs, workers=None, stage="": batches.append(
+        (len(jobs), workers, stage)) or real(jobs, workers))
     again = planner._replan(plan, [spec] * 3, popts, ("start", "jump", "jump"), False, workers=2)
-    assert batches == [(2, 2)] and again.success and len(again.states) == 3
+    assert batches == [(2, 2, "programs again")] and again.success and len(again.states) == 3
     np.testing.assert_array_equal(again.states[0], again.states[2])
     alone = solve_program([spec], dataclasses.replace(popts, mu_init=planner._LINKED_MU), guess=planner._section_of(plan, 1),
                           meshes=plan.meshes[1:2])
     np.testing.assert_array_equal(again.states[1], alone.states[0])  # the same program as solved on its own
+
+
+def test_every_program_solved_is_reported_batch_by_batch():
+    # issue 19: a drawing's planning ran for minutes without a word; the command line now shows
+    # each batch of programs as it is solved
+    from skatetrace.planning.pool import reporting
+
+    seen = []
+    with reporting(lambda stage, done, total: seen.append((stage, done, total))):
+        trace = plan_figure(st.school_figure("loop", height=1.7), options=st.TraceOptions(reach=0.5, speed=2.0))
+    assert trace.success
+    stages = [s for s, _d, _t in seen]
+    assert stages[0] == "warm starts" and "linked programs" in stages
+    for stage in set(stages):
+        counts = [(d, t) for s, d, t in seen if s == stage]
+        assert counts[-1][0] == counts[-1][1] and all(1 <= d <= t for d, t in counts)
+    plan_figure(st.school_figure("loop", height=1.7), options=st.TraceOptions(reach=0.5, speed=2.0))
+    assert len(seen) == len(stages)  # outside the block, nothing is reported
 
 
 def test_a_larger_linked_program_gets_fewer_iterations(monkeypatch):

@@ -12,7 +12,7 @@ import dataclasses
 import math
 import sys
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 from ..errors import SkatetraceError
@@ -350,6 +350,19 @@ def _unplanned_if_better(done, figure, params, options, args, limits, progress):
     return again, unbounded
 
 
+def _planning_progress(options: TraceOptions):
+    """A block within which the planner's programs show on standard error as they are solved (nothing without a reach)."""
+    if options.reach is None:
+        return nullcontext()
+    from ..planning.pool import reporting
+
+    def report(stage: str, done: int, total: int) -> None:
+        print(f"\rplanning: {stage} solved {done}/{total}", end="\n" if done == total else "", file=sys.stderr,
+              flush=True)
+
+    return reporting(report)
+
+
 def _trace(args) -> int:
     from ..outputs.results import write_results
     from ..pipeline import trace_and_verify
@@ -374,8 +387,9 @@ def _trace(args) -> int:
         print(f"\rtracing sections {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
 
     limits = _human_limits(args, res, params)
-    done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
-                            progress=progress)
+    with _planning_progress(options):
+        done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
+                                progress=progress)
     if args.reach is None and options.reach is not None and not all(s.success for s in done.trace.sections):
         done, options = _unplanned_if_better(done, figure, params, options, args, limits, progress)
     figure, trace, schedule, states, report = done.figure, done.trace, done.schedule, done.states, done.report

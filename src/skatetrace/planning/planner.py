@@ -177,7 +177,7 @@ def _presolved(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: 
             key, sign = _warm_key(spec, start, end, popts.reach)
             if key not in jobs:
                 jobs[key] = (([dataclasses.replace(spec, turn=0.0)], _warm_options(popts, start, end), None, None), sign)
-    sols = solve_programs([job for job, _sign in jobs.values()], workers)
+    sols = solve_programs([job for job, _sign in jobs.values()], workers, "warm starts")
     return {key: (sol, sign) for (key, (_job, sign)), sol in zip(jobs.items(), sols)}
 
 
@@ -393,7 +393,8 @@ def _plan_curves(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers
     linking = [i for i, ((specs, _popts), (guess, _bad, _c)) in enumerate(zip(curves, warm))
                if guess is not None and len(specs) > 1]
     jobs = [_linked_job(curves[i][0], _linked_options(curves[i][1]), warm[i][0], warm[i][0].meshes) for i in linking]
-    linked = {i: whole(sol) for i, (_job, whole), sol in zip(linking, jobs, solve_programs([j for j, _ in jobs], workers))}
+    sols = solve_programs([j for j, _ in jobs], workers, "linked programs")
+    linked = {i: whole(sol) for i, (_job, whole), sol in zip(linking, jobs, sols)}
     out = []
     for i, (specs, _popts) in enumerate(curves):
         guess, bad, continues = warm[i]
@@ -437,7 +438,7 @@ def _replan(plan: ProgramSolution, specs, popts: ProgramOptions, links, linked: 
     meshes = plan.meshes if meshes is None else meshes
     if linked:
         job, whole = _linked_job(specs, _linked_options(popts), guess, meshes)
-        return whole(solve_program(*job[:2], guess=job[2], meshes=job[3]))
+        return whole(solve_programs([job], 1, "programs again")[0])
     jobs: dict[bytes, tuple] = {}
     keys = []
     for k, spec in enumerate(specs):
@@ -449,7 +450,7 @@ def _replan(plan: ProgramSolution, specs, popts: ProgramOptions, links, linked: 
         key = pickle.dumps((job[0], opts, guess.times[k], X, guess.controls[k], meshes[k]))
         jobs.setdefault(key, job)
         keys.append(key)
-    solved = dict(zip(jobs, solve_programs(list(jobs.values()), workers)))
+    solved = dict(zip(jobs, solve_programs(list(jobs.values()), workers, "programs again")))
     sols = [solved[key] for key in keys]
     failed = next((sol for sol in sols if not sol.success), None)
     return failed if failed is not None else _chain(sols, "warm start")

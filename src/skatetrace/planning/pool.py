@@ -7,14 +7,40 @@ Python's lock, so the programs are solved in forked processes (:func:`skatetrace
 where forking is not safe, and for a batch of one, one after another; a worker that dies costs
 nothing already solved). Every program is solved by the same code either way, so the answers do
 not depend on ``workers``.
+
+Whoever wants to see a long planning run move (the command line) registers a callback with
+:func:`reporting`; every batch then tells it, program by program, how far it is.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
+from collections.abc import Callable, Iterator
+
 from ..processes import DEFAULT_MAX_WORKERS, available_workers, run_jobs
 from .collocation import ProgramSolution, solve_program
 
-__all__ = ["available_workers", "solve_programs", "DEFAULT_MAX_WORKERS"]
+__all__ = ["available_workers", "solve_programs", "reporting", "DEFAULT_MAX_WORKERS"]
+
+# The callback told of every program solved (see reporting), or None.
+_REPORT: contextvars.ContextVar[Callable[[str, int, int], None] | None] = contextvars.ContextVar(
+    "_REPORT", default=None)
+
+
+@contextlib.contextmanager
+def reporting(report: Callable[[str, int, int], None]) -> Iterator[None]:
+    """Within the ``with`` block, call ``report(stage, done, total)`` after each program a batch solves.
+
+    ``stage`` names the batch (``"warm starts"``, ``"linked programs"``, ``"programs again"``),
+    ``done`` of its ``total`` programs are solved. The registration is per thread and per task (a
+    context variable); an inner block replaces an outer one.
+    """
+    token = _REPORT.set(report)
+    try:
+        yield
+    finally:
+        _REPORT.reset(token)
 
 
 def _solve(job: tuple) -> ProgramSolution:
@@ -22,7 +48,7 @@ def _solve(job: tuple) -> ProgramSolution:
     return solve_program(sections, options, guess=guess, meshes=meshes)
 
 
-def solve_programs(jobs: list[tuple], workers: int | None = None) -> list[ProgramSolution]:
+def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "programs") -> list[ProgramSolution]:
     """:func:`~skatetrace.planning.collocation.solve_program` on every job, in order.
 
     Parameters
@@ -32,10 +58,18 @@ def solve_programs(jobs: list[tuple], workers: int | None = None) -> list[Progra
     workers : int or None
         Processes to solve them in: None uses :func:`available_workers`, at most
         :data:`DEFAULT_MAX_WORKERS`; 1 (or a batch of one) solves them here, one after another.
+    stage : str
+        What the batch is, for the callback of :func:`reporting`.
 
     Returns
     -------
     list of ProgramSolution
         One per job, in the order of ``jobs``.
     """
-    return list(run_jobs(_solve, jobs, workers))
+    report = _REPORT.get()
+    out = []
+    for sol in run_jobs(_solve, jobs, workers):
+        out.append(sol)
+        if report is not None:
+            report(stage, len(out), len(jobs))
+    return out
