@@ -232,6 +232,37 @@ def test_min_count_search_has_a_budget(monkeypatch):
     assert "stopped at its budget; kept greedy's" in fit.message
 
 
+def test_min_count_search_budgets_the_pieces_its_windows_span(monkeypatch, tmp_path):
+    # a dense polygon (800 lines of a circle, each join turning 0.45 degrees: smooth): the search's
+    # windows span up to hundreds of lines, and the certificates alone did not bound its time
+    # (150 s at 6 m / 1 mm); the source pieces certified are budgeted too
+    from skatetrace.drawings.sources import resolve
+
+    n = 800
+    pts = " ".join(f"{100 * math.cos(2 * math.pi * i / n):.6f},{100 * math.sin(2 * math.pi * i / n):.6f}"
+                   for i in range(n))
+    svg = tmp_path / "polygon.svg"
+    svg.write_text(f'<svg xmlns="http://www.w3.org/2000/svg"><polygon points="{pts}" stroke="black" fill="none"/></svg>')
+    spans = []
+    real = fitting._certify
+
+    def counting(pieces, window, *args, **kwargs):
+        spans.append(len(window))
+        return real(pieces, window, *args, **kwargs)
+
+    monkeypatch.setattr(fitting, "_certify", counting)
+    monkeypatch.setattr(fitting, "MIN_PIECE_BUDGET", 5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = resolve(str(svg), size="6m", tol="1mm", method="min")
+    (pf,) = res.fit.paths
+    assert res.fit.success and pf.greedy_count == pf.n_segments
+    assert "stopped at its budget; kept greedy's" in pf.message
+    # greedy certifies each line once or twice; the search then spends its budget of pieces, and
+    # one certificate more (without that budget: 24,100 certificates of up to hundreds of pieces)
+    assert sum(spans) <= 2 * n + 5 * n + 100 + max(spans)
+
+
 coord = st.floats(-2.0, 2.0, allow_nan=False).map(lambda v: round(v, 1))
 
 

@@ -48,6 +48,7 @@ MIN_SPAN = 1e-9  # relative to the size: a span shorter than this is not halved 
 MAX_INTERVALS = 100_000  # biarcs per path before the fit gives up
 MIN_DENSITY = 6  # candidate breakpoints per greedy biarc for the minimum-count fit
 MIN_BUDGET = 30  # certificates per greedy biarc the minimum-count search may spend before keeping greedy's
+MIN_PIECE_BUDGET = 100  # source pieces certified (over all its windows) per greedy biarc, likewise
 
 
 _Loc = tuple  # (span index within the run, t on that span's piece)
@@ -256,13 +257,19 @@ class _Fitter:
         data = [geom.data(c) for c in cand]
 
         budget = self.budget.certificates + MIN_BUDGET * len(greedy) + 100
+        # A certificate costs in proportion to the source pieces its window spans: over a dense
+        # polyline (800 lines of a circle) the search's windows span hundreds, and 11,000
+        # certificates took 150 s. The pieces certified are budgeted too.
+        spent, piece_budget = [0], MIN_PIECE_BUDGET * len(greedy) + 100
 
         def feasible(i: int, j: int) -> bool:
             if (i, j) not in cache:
-                if self.budget.certificates > budget:
+                if self.budget.certificates > budget or spent[0] > piece_budget:
                     raise _OverBudget()
-                if not geom.window(cand[i], cand[j]):
+                window = geom.window(cand[i], cand[j])
+                if not window:
                     return False
+                spent[0] += len(window)
                 segs = _biarc(*data[i], *data[j])
                 # Feasibility only: refine until the bound is below tol, not until it is tight.
                 cert = self.certify(geom, cand[i], cand[j], data[i], segs, tight=False)
