@@ -1,6 +1,6 @@
 """Run every benchmark scenario, print a summary table and write bench/RESULTS.md.
 
-Run: python bench/run_all.py [--quick | --smoke] [--out PATH]
+Run: python bench/run_all.py [--quick | --smoke] [--out PATH] [--readme PATH | --readme-only]
 
 Scenarios (each a script in bench/, run in this one process, in this order):
 1. ``bench_paper_arcs``: the paper's three arcs, exact engine vs the paper-style baseline;
@@ -20,6 +20,10 @@ cases (a straight line instead of the double flower, 3 arcs instead of 200, ...)
 mean nothing. RESULTS.md records the date, machine (with load averages: the machine may be shared),
 Python and package versions, every scenario's figures, the issue's targets met or not, and a
 section "Profile and what would close the gap" to be completed by hand. Timings are never asserted.
+
+A full run also rewrites the README's block of speed figures (between :data:`README_BEGIN` and
+:data:`README_END`) from the targets it just wrote (:func:`readme_block`), so the README quotes the
+script; ``--readme-only`` rewrites that block from the RESULTS.md already there, running nothing.
 """
 
 from __future__ import annotations
@@ -570,6 +574,69 @@ def _scenario_header(meta: dict, key: str, title: str) -> str:
 # ----------------------------------------------------------------------------------------------
 
 
+README_BEGIN = "<!-- speed: written by python bench/run_all.py from bench/RESULTS.md; do not edit -->"
+README_END = "<!-- end of speed -->"
+
+
+def targets_from_markdown(text: str) -> tuple[str, list[dict]]:
+    """The first line (date, mode) and the rows of the targets table of a RESULTS.md."""
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("## Targets"))
+    rows = []
+    for line in lines[start + 1:]:
+        if line.startswith("## "):
+            break
+        if not line.startswith("| ") or line.startswith("| target |"):
+            continue
+        cells = [c.strip() for c in line.strip("|").split(" | ")]
+        if len(cells) == 4:
+            rows.append({"target": cells[0], "measured": cells[1], "ratio": cells[2],
+                         "met": {"**met**": True, "**not met**": False}.get(cells[3])})
+    when = next((line for line in lines if line.startswith("Written by")), "")
+    return when, rows
+
+
+def readme_block(when: str, tgt: list[dict]) -> list[str]:
+    """The README's speed figures: each target as measured, the cold runs of issue 18 counted."""
+    cold = [t for t in tgt if "from a cold CLI start <=" in t["target"] and "x the double flower" in t["target"]]
+    planned = [t for t in tgt if " planned within " in t["target"]]
+    rows = []
+    for t in tgt:
+        if t in cold or t in planned or t["target"].startswith("paper arc"):
+            continue
+        rows.append([t["target"], t["measured"].split(" (")[0], _met(t["met"])])
+    if planned:
+        secs = [float(t["measured"].split(" s")[0]) for t in planned]
+        rows.append([f"every school figure planned within 0.5 m, plan + trace + verify <= {PLAN_S:g} s warm",
+                     f"{sum(bool(t['met']) for t in planned)} of {len(planned)} ({min(secs):.1f} to {max(secs):.1f} s)",
+                     _met(all(t["met"] for t in planned))])
+    arcs = [t for t in tgt if t["target"].startswith("paper arc")]
+    if arcs:
+        rows.append([f"the paper's {len(arcs)} arcs >= {PAPER_SPEEDUP:g}x faster than the paper-style baseline",
+                     ", ".join(t["measured"].split(" (")[0] for t in arcs), _met(all(t["met"] for t in arcs))])
+    if cold:
+        missed = [f"{t['target'].split(' from a cold')[0]} {t['ratio'].split(' ')[0]}" for t in cold if not t["met"]]
+        rows.append([f"every school figure and example drawing from a cold CLI start <= {COLD_RATIO:g}x the double "
+                     "flower's", f"{sum(bool(t['met']) for t in cold)} of {len(cold)}"
+                     + (f" (not: {', '.join(missed)})" if missed else ""), _met(not missed)])
+    stamp = when.replace("Written by ", "").rstrip(".") or "python bench/run_all.py"
+    return [README_BEGIN, "", f"Measured by {stamp}; the whole table, with every scenario, is in "
+            "[bench/RESULTS.md](bench/RESULTS.md).", "", *_table(["target", "measured", "status"], rows), "",
+            README_END]
+
+
+def update_readme(readme: Path, results: Path) -> bool:
+    """Rewrite the README's speed block from ``results`` (RESULTS.md); False if the README has no block."""
+    text = readme.read_text(encoding="utf-8")
+    if README_BEGIN not in text or README_END not in text:
+        return False
+    head, rest = text.split(README_BEGIN, 1)
+    tail = rest.split(README_END, 1)[1]
+    block = "\n".join(readme_block(*targets_from_markdown(results.read_text(encoding="utf-8"))))
+    readme.write_text(head + block + tail, encoding="utf-8")
+    return True
+
+
 def summary(res: dict, tgt: list[dict]) -> str:
     w = max(len(t["target"]) for t in tgt) if tgt else 10
     lines = [f"{'target':<{w}}  {'status':<9}  measured", "-" * (w + 60)]
@@ -585,10 +652,20 @@ def main(argv=None) -> dict:
     g.add_argument("--quick", action="store_true", help="a fast pass: fewer runs, sizes <= 100")
     g.add_argument("--smoke", action="store_true", help="tiny cases for CI (numbers meaningless)")
     ap.add_argument("--out", default=str(HERE / "RESULTS.md"), help="where to write RESULTS.md (default bench/RESULTS.md)")
+    ap.add_argument("--readme", default=None,
+                    help="README whose speed block to rewrite from the results (default: the project's README in "
+                         "a full run, none otherwise)")
+    ap.add_argument("--readme-only", action="store_true",
+                    help="rewrite the README's speed block from the RESULTS.md at --out, and run nothing")
     ap.add_argument("--dedicated", action="store_true",
                     help="the machine ran nothing else: drop the shared-machine warning from RESULTS.md")
     args = ap.parse_args(argv)
     mode = "smoke" if args.smoke else ("quick" if args.quick else "full")
+    readme = Path(args.readme) if args.readme else (HERE.parent / "README.md" if mode == "full" else None)
+    if args.readme_only:
+        done = update_readme(readme or HERE.parent / "README.md", Path(args.out))
+        print(f"{'rewrote' if done else 'found no speed block in'} {readme or HERE.parent / 'README.md'}")
+        return {"readme": done}
     argv_list = list(sys.argv[1:] if argv is None else argv)
     start = time.perf_counter()
     meta = {"mode": mode, "argv": argv_list, "shared": not args.dedicated, "date": _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M:%S %Z"),
@@ -608,6 +685,8 @@ def main(argv=None) -> dict:
     print("\n" + summary(res, tgt), flush=True)
     out = Path(args.out)
     write_markdown(out, res, meta)
+    if readme is not None and update_readme(readme, out):
+        print(f"rewrote the speed block of {readme}")
     print(f"\nwrote {out} (runner took {meta['runtime_s']:.0f} s; load average {_load(meta['load_end'])} at the end)",
           flush=True)
     return {"results": res, "targets": tgt, "meta": meta, "out": str(out)}

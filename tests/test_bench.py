@@ -32,6 +32,21 @@ def test_bench_robustness_small(capsys, tmp_path):
     assert "| double-flower |" in text and "with 2 trials" in text
 
 
+def test_the_readme_quotes_the_speed_figures_of_bench_results():
+    # issue 18: the README quotes run_all's figures; its block is rewritten from bench/RESULTS.md
+    mod = _load("run_all")
+    when, rows = mod.targets_from_markdown((BENCH / "RESULTS.md").read_text())
+    assert len(rows) >= 10 and all(r["met"] in (True, False) for r in rows)
+    readme = (BENCH.parent / "README.md").read_text()
+    block = readme.split(mod.README_BEGIN, 1)[1].split(mod.README_END, 1)[0]
+    assert [mod.README_BEGIN, *block.split("\n")[1:-1], mod.README_END] == mod.readme_block(when, rows), \
+        "run python bench/run_all.py --readme-only"
+    counted = ("planned within", "x the double flower", "paper arc")  # counted in one row each
+    for r in rows:  # every other target has its own row, met or not
+        if not any(c in r["target"] for c in counted):
+            assert f"| {r['target']} |" in block, r["target"]
+
+
 def test_bench_school_small(capsys):
     rows = _load("bench_school").main(["circle-eight"])
     assert rows[0]["figure"] == "circle-eight" and rows[0]["success"]
@@ -107,8 +122,14 @@ def test_bench_scaling_small(tmp_path, capsys):
 def test_run_all_smoke(tmp_path, capsys):
     results = BENCH / "RESULTS.md"
     before = results.stat().st_mtime_ns if results.exists() else None
-    out = _load("run_all").main(["--smoke", "--out", str(tmp_path / "RESULTS.md")])
+    mod = _load("run_all")
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# x\n\n{mod.README_BEGIN}\nSTALE BLOCK\n{mod.README_END}\n\nLicense\n")
+    out = mod.main(["--smoke", "--out", str(tmp_path / "RESULTS.md"), "--readme", str(readme)])
     assert (results.stat().st_mtime_ns if results.exists() else None) == before  # bench/RESULTS.md untouched
+    quoted = readme.read_text()
+    assert "STALE BLOCK" not in quoted and quoted.startswith("# x\n") and quoted.endswith("\nLicense\n")
+    assert "| a single arc traced warm <= 0.5 ms |" in quoted and "| every school figure and example drawing" in quoted
     text = (tmp_path / "RESULTS.md").read_text()
     for heading in ("## Machine", "## Versions", "## Targets (issues 6, 15, 18)", "## 1. The paper's three arcs",
                     "## 2. line end to end", "## 3. A long figure: 3 distinct arcs", "## 4. Scaling",
