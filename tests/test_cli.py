@@ -594,3 +594,17 @@ def test_ctrl_c_stops_the_planner_and_its_workers_with_one_line(tmp_path, whom):
     time.sleep(0.5)
     with pytest.raises(ProcessLookupError):
         os.killpg(run.pid, 0)  # no worker left behind
+
+
+def test_progress_of_two_kinds_keeps_each_count_on_a_line_of_its_own(capsys):
+    # the planner's batches report while sections are traced: neither overwrites the other's count
+    from skatetrace.cli.commands import _StatusLine
+
+    status = _StatusLine()
+    status.show("sections", "tracing sections 1/3", False)
+    status.show("warm starts", "planning: warm starts solved 1/2", False)
+    status.show("warm starts", "planning: warm starts solved 2/2", True)
+    status.show("sections", "tracing sections 2/3", False)
+    status.show("sections", "tracing sections 3/3", True)
+    shown = [line.split("\r")[-1] for line in capsys.readouterr().err.split("\n")]  # what a terminal keeps
+    assert shown == ["tracing sections 1/3", "planning: warm starts solved 2/2", "tracing sections 3/3", ""]

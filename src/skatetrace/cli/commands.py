@@ -350,17 +350,27 @@ def _unplanned_if_better(done, figure, params, options, args, limits, progress):
     return again, unbounded
 
 
-def _planning_progress(options: TraceOptions):
+class _StatusLine:
+    """A line of progress on stderr, redrawn in place; progress of another kind starts a line of its own."""
+
+    def __init__(self) -> None:
+        self.kind: str | None = None
+
+    def show(self, kind: str, text: str, last: bool) -> None:
+        if self.kind not in (None, kind):
+            print(file=sys.stderr)  # keep the other kind's count where it stopped
+        print(f"\r{text}", end="\n" if last else "", file=sys.stderr, flush=True)
+        self.kind = None if last else kind
+
+
+def _planning_progress(options: TraceOptions, status: _StatusLine):
     """A block within which the planner's programs show on standard error as they are solved (nothing without a reach)."""
     if options.reach is None:
         return nullcontext()
     from ..planning.pool import reporting
 
-    def report(stage: str, done: int, total: int) -> None:
-        print(f"\rplanning: {stage} solved {done}/{total}", end="\n" if done == total else "", file=sys.stderr,
-              flush=True)
-
-    return reporting(report)
+    return reporting(lambda stage, done, total: status.show(stage, f"planning: {stage} solved {done}/{total}",
+                                                            done == total))
 
 
 def _trace(args) -> int:
@@ -382,12 +392,14 @@ def _trace(args) -> int:
     for note in res.notes:
         print(f"note: {note}")
 
+    status = _StatusLine()
+
     def progress(done, total):
         # the line ends with the round, so that what verification says (compiling, first time) starts a line
-        print(f"\rtracing sections {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
+        status.show("sections", f"tracing sections {done}/{total}", done == total)
 
     limits = _human_limits(args, res, params)
-    with _planning_progress(options):
+    with _planning_progress(options, status):
         done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
                                 progress=progress)
     if args.reach is None and options.reach is not None and not all(s.success for s in done.trace.sections):
