@@ -502,3 +502,25 @@ def test_an_error_in_finishing_a_curve_is_that_curves_failure_not_the_runs(monke
     assert calls == [0, 1] and first.status is st.TraceStatus.NOT_PLANNED and not first.phases
     assert "the planner failed on this curve (OverflowError: cannot convert" in first.message
     assert second.success and max(second.residuals.values()) <= 1e-10
+
+
+def test_a_section_without_a_plan_searches_larger_reaches_only_when_asked(monkeypatch):
+    # the command line's default reach falls back to the launch-glide-stop manoeuvres, and the
+    # search of larger reaches (one program each: 65 s on a spiral of 60 arcs) only delayed that
+    from skatetrace.planning import planner
+
+    fig = figure_from_dict({"schema": "skatetrace.figure/1", "params": {"M": 2, "m": 1, "I": 3},
+                            "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 198}]}]})
+    searched = []
+    real = planner.smallest_reach
+    monkeypatch.setattr(planner, "smallest_reach", lambda *a: searched.append(1) or real(*a))
+    hinted = plan_figure(fig, options=st.TraceOptions(reach=0.02))
+    (sec,) = hinted.sections
+    assert searched and sec.status.name == "INFEASIBLE" and "on its own it plans within" in sec.message
+    assert 0.02 < sec.metrics["smallest_feasible_reach"] <= 0.1
+    searched.clear()
+    (bare,) = plan_figure(fig, options=st.TraceOptions(reach=0.02, reach_hint=False)).sections
+    assert not searched and bare.status.name == "INFEASIBLE" and "on its own" not in bare.message
+    assert "smallest_feasible_reach" not in (bare.metrics or {})
+    with pytest.raises(ValueError, match="reach_hint must be True or False"):
+        st.TraceOptions(reach=1.0, reach_hint="no")

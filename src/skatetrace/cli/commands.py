@@ -384,8 +384,10 @@ def _trace(args) -> int:
     params = SleighParams(M=args.M if args.M is not None else base.M, m=args.m if args.m is not None else base.m,
                           I=args.I if args.I is not None else base.I)
     speed = args.speed if args.speed is not None else (2.0 if res.unit == "m" else 1.0)
+    # the default reach (not asked for) falls back to the launch-glide-stop manoeuvres where a
+    # section has no plan: searching larger reaches for it would only delay that
     options = TraceOptions(speed=speed, reach=_reach(args, res.unit), objective=args.objective,
-                           max_accel=args.max_accel, workers=args.workers)
+                           max_accel=args.max_accel, workers=args.workers, reach_hint=args.reach is not None)
     if options.reach is not None:
         print(f"note: planning the mass's motion within {options.reach:.4g} {res.unit if res.unit == 'm' else 'model units'} "
               f"of the blade for least {options.objective} (--reach none: the launch-glide-stop manoeuvres)")

@@ -601,9 +601,10 @@ def _infeasible_curve(specs, sections, bad: int, ci, params, options, popts) -> 
         return [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED,
                         f"reach {options.reach:.4g}: not planned: " + (refused if k == bad else other))
                 for k, sec in enumerate(sections)]
-    wider = smallest_reach(specs[bad], popts)
+    searched = options.reach_hint
+    wider = smallest_reach(specs[bad], popts) if searched else None
     scale = options.reach / popts.reach  # the program's reach is inside the margin
-    hint = (f"; on its own it plans within {wider * scale:.4g}" if wider is not None else
+    hint = ("" if not searched else f"; on its own it plans within {wider * scale:.4g}" if wider is not None else
             f"; on its own it plans within none of {', '.join(f'{f * options.reach:.4g}' for f in _LARGER_REACHES)}")
     out = []
     for k, sec in enumerate(sections):
@@ -611,7 +612,7 @@ def _infeasible_curve(specs, sections, bad: int, ci, params, options, popts) -> 
                if k == bad else f"reach {options.reach:.4g}: not planned, section {bad} of this curve has no motion "
                                 f"within the reach")
         tr = _failed(sec, ci, params, options, TraceStatus.INFEASIBLE, msg)
-        if k == bad:
+        if k == bad and searched:
             tr = dataclasses.replace(tr, metrics={"smallest_feasible_reach": None if wider is None else wider * scale})
         out.append(tr)
     return out

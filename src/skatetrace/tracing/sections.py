@@ -103,6 +103,12 @@ class TraceOptions:
     max_accel, max_mass_speed : float or None
         Optional bounds of the plan: the mass's acceleration on the ice, and its speed relative to
         the blade.
+    reach_hint : bool
+        With a reach: plan a section that has no motion within it on its own within a few larger
+        reaches (1.5, 2, 3 and 5 times), to say which would do (``smallest_feasible_reach`` in its
+        metrics). Each is one more program: a long section's can take a minute (a spiral of 60
+        arcs, 65 s). False says only that the reach is too small (the command line's default
+        reach, which falls back to the launch-glide-stop manoeuvres, does so).
     workers : int or None
         Processes in which independent work runs side by side: the planner's programs (the
         distinct sections' warm starts, the curves' linked programs) and the tracer's distinct
@@ -125,6 +131,7 @@ class TraceOptions:
     objective: str = "effort"
     max_accel: float | None = None
     max_mass_speed: float | None = None
+    reach_hint: bool = True
     workers: int | None = None
 
     def __post_init__(self) -> None:
@@ -157,6 +164,8 @@ class TraceOptions:
             if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))
                                       or not (math.isfinite(value) and value > 0)):
                 raise ValueError(f"{name} must be a positive finite number or None, got {value!r}")
+        if not isinstance(self.reach_hint, (bool, np.bool_)):
+            raise ValueError(f"reach_hint must be True or False, got {self.reach_hint!r}")
         if self.objective not in ("effort", "time"):
             raise ValueError(f"objective must be 'effort' or 'time', got {self.objective!r}")
         if self.objective == "time" and self.reach is not None and self.max_accel is None:
