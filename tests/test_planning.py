@@ -524,3 +524,25 @@ def test_a_section_without_a_plan_searches_larger_reaches_only_when_asked(monkey
     assert "smallest_feasible_reach" not in (bare.metrics or {})
     with pytest.raises(ValueError, match="reach_hint must be True or False"):
         st.TraceOptions(reach=1.0, reach_hint="no")
+
+
+def test_curves_drawn_alike_share_one_linked_program():
+    # a row of identical strokes (an SVG's, scaled: equal up to round-off) was one linked program
+    # each; each distinct one is now solved once, and every curve is still finished exactly
+    import copy
+
+    from skatetrace.planning.pool import reporting
+
+    data = copy.deepcopy(CUSPS["pivot"])
+    twin = copy.deepcopy(data["curves"][0])
+    twin["pieces"][0]["radius"] *= 1 + 4e-16  # the round-off of a translated, scaled copy
+    other = copy.deepcopy(data["curves"][0])
+    other["pieces"][1]["radius"] = 1.4  # a stroke drawn differently
+    data["curves"] += [twin, other]
+    seen = []
+    with reporting(lambda stage, done, total: seen.append((stage, total))):
+        trace = plan_figure(figure_from_dict(data), options=st.TraceOptions(reach=1.0))
+    assert ("linked programs", 2) in seen and all(t == 2 for s, t in seen if s == "linked programs")
+    assert trace.success and len(trace.sections) == 6
+    assert all(max(sec.residuals.values()) <= 1e-10 and sec.metrics["reach"] <= 1.0 for sec in trace.sections)
+    assert [sec.metrics["link"] for sec in trace.sections] == ["start", "impulse"] * 3

@@ -350,6 +350,22 @@ def _sections_of(plan: ProgramSolution, ks) -> ProgramSolution:
                                message=plan.message, objective=plan.objective, iterations=plan.iterations)
 
 
+def _job_key(job: tuple) -> bytes:
+    """What makes two programs the same: sections and options to 12 digits (as the warm starts are
+    shared, :func:`_shape_key`: strokes drawn alike differ in round-off once scaled), the guess's
+    nodes and the meshes. The plan is only the start of each curve's exact finish, which is its own."""
+    specs, popts, guess, meshes = job
+
+    def g(v: float) -> float:
+        return float(f"{v:.12g}")
+
+    sections = tuple((tuple((tuple(g(c) for c in pc.coefficients), g(pc.length)) for pc in spec.pieces), g(spec.turn),
+                      g(spec.duration)) for spec in specs)
+    turn = popts.closing_turn
+    popts = dataclasses.replace(popts, closing_turn=None if turn is None else g(turn))
+    return pickle.dumps((sections, popts, guess.times, guess.states, guess.controls, meshes))
+
+
 def _linked_job(specs, popts: ProgramOptions, guess: ProgramSolution, meshes):
     """The linked program of a curve as a job for :func:`~skatetrace.planning.pool.solve_programs`, and how to read its answer.
 
@@ -393,8 +409,14 @@ def _plan_curves(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers
     linking = [i for i, ((specs, _popts), (guess, _bad, _c)) in enumerate(zip(curves, warm))
                if guess is not None and len(specs) > 1]
     jobs = [_linked_job(curves[i][0], _linked_options(curves[i][1]), warm[i][0], warm[i][0].meshes) for i in linking]
-    sols = solve_programs([j for j, _ in jobs], workers, "linked programs")
-    linked = {i: whole(sol) for i, (_job, whole), sol in zip(linking, jobs, sols)}
+    # Curves drawn alike (the same sections, pins and guess: a row of identical strokes) are the
+    # same program: each distinct one is solved once (15 identical strokes took 15 solves).
+    distinct: dict[bytes, tuple] = {}
+    keys = [_job_key(job) for job, _whole in jobs]
+    for key, (job, _whole) in zip(keys, jobs):
+        distinct.setdefault(key, job)
+    solved = dict(zip(distinct, solve_programs(list(distinct.values()), workers, "linked programs")))
+    linked = {i: whole(solved[key]) for i, (_job, whole), key in zip(linking, jobs, keys)}
     out = []
     for i, (specs, _popts) in enumerate(curves):
         guess, bad, continues = warm[i]
