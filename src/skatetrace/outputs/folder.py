@@ -22,8 +22,8 @@ from typing import Any
 from ..errors import SkatetraceError
 from .files import atomic_write, dumps_json, record_writes, stage_writes
 
-__all__ = ["MANIFEST", "STAGING_PREFIX", "check_finished", "check_output_folder", "check_output_file", "output_path", "OutputFolder",
-           "adopt"]
+__all__ = ["MANIFEST", "STAGING_PREFIX", "check_finished", "check_output_folder", "check_output_file", "output_path",
+           "OutputFolder", "adopt"]
 
 #: The list of files skatetrace wrote into an output folder (see :class:`OutputFolder`).
 MANIFEST = ".skatetrace-manifest.json"
