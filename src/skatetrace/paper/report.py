@@ -39,14 +39,14 @@ import numpy as np
 from ..dynamics.model import SleighParams
 from ..outputs.files import atomic_write, staged
 from ..tracing.sections import TraceOptions
-from .conditioning import (Conditioning, Perturbation, Spread, condition_cost, condition_exact_arc,
+from .conditioning import (Conditioning, Perturbation, condition_cost, condition_exact_arc,
                            condition_paper_arc, perturbations)
 from .controls import control_from_params
 from .errata import Erratum, find_errata
 from .evaluate import ArcEvaluation, evaluate_exact_arc, evaluate_paper_arc
 from .procedure import ProcedureResult, RoundingStudy, best_within_rounding, run_procedure
 from .reduced import PAPER_SOLVER, TIGHT_SOLVER, ReducedOptions, integrate_reduced
-from .singular import Crossing, approach_a_zero
+from .singular import approach_a_zero
 from .tables import METHODS, PaperRow, paper_row, paper_rows
 
 __all__ = ["RowResult", "Reproduction", "reproduce", "reading_study", "write_report", "strict_json"]
