@@ -3,7 +3,8 @@
 Run: python bench/bench_fit.py [--quick] [--tol T ...]
 
 For each reference curve (an ellipse, a cubic Bézier S-curve, a sine wave, a lemniscate given as a
-parametric function, an Euler spiral) and each tolerance (relative to the curve's size), fits the curve
+parametric function, an Euler spiral, and two dense polylines: a circle drawn as 2,500 lines and a
+sine wave as 2,000, which greedy alone fitted with a piece per line) and each tolerance (relative to the curve's size), fits the curve
 with ``method="greedy"`` and ``method="min"`` and prints the segments each uses, the time each takes and
 the certified Hausdorff bound as a fraction of the tolerance. ``--quick`` runs one curve at one tolerance.
 Timings are never asserted.
@@ -18,7 +19,7 @@ import warnings
 import numpy as np
 from scipy.special import fresnel
 
-from skatetrace.drawings.curves import BezierPiece, EllipticArcPiece, FunctionPiece, Path
+from skatetrace.drawings.curves import BezierPiece, EllipticArcPiece, FunctionPiece, LinePiece, Path
 from skatetrace.drawings.fitting import fit_path
 
 
@@ -46,6 +47,22 @@ def _euler_spiral():
                                           math.pi * u * np.cos(0.5 * math.pi * u * u))),), name="euler-spiral")
 
 
+def _polyline(x, y, closed: bool, name: str) -> Path:
+    pts = list(zip(x.tolist(), y.tolist()))
+    ends = pts[1:] + pts[:1] if closed else pts[1:]
+    return Path(tuple(LinePiece(a, b) for a, b in zip(pts, ends)), closed=closed, name=name)
+
+
+def _polygon_circle(n: int = 2500) -> Path:
+    th = 2 * math.pi * np.arange(n) / n
+    return _polyline(np.cos(th), np.sin(th), True, f"circle-{n}-gon")
+
+
+def _polyline_sine(n: int = 2000) -> Path:
+    u = np.linspace(0.0, 2 * math.pi, n)
+    return _polyline(u, np.sin(u), False, f"sine-{n}-lines")
+
+
 CURVES = {
     "ellipse": lambda: Path((EllipticArcPiece((0.0, 0.0), 2.0, 1.0, 0.0, 0.0, 2 * math.pi),), closed=True,
                             name="ellipse"),
@@ -53,6 +70,8 @@ CURVES = {
     "sine": _sine,
     "lemniscate": _lemniscate,
     "euler-spiral": _euler_spiral,
+    "circle-2500-gon": _polygon_circle,
+    "sine-2000-lines": _polyline_sine,
 }
 
 
@@ -70,7 +89,7 @@ def main(argv=None) -> list[dict]:
     names = ["ellipse"] if args.quick else list(CURVES)
     tols = [1e-2] if args.quick else args.tol
     rows = []
-    print(f"{'curve':>12} {'tol/size':>8} {'greedy':>6} {'g time s':>8} {'g bound/tol':>11} "
+    print(f"{'curve':>15} {'tol/size':>8} {'greedy':>6} {'g time s':>8} {'g bound/tol':>11} "
           f"{'min':>5} {'m time s':>8} {'m bound/tol':>11} {'min/greedy':>10}")
     for name in names:
         path = CURVES[name]()
@@ -91,7 +110,7 @@ def main(argv=None) -> list[dict]:
                    "min_success": m.success, "min_certificates": m.certificates,
                    "curve_length": g.curve_length, "greedy_length_error": g.spline_length - g.curve_length}
             rows.append(row)
-            print(f"{name:>12} {rel:>8.0e} {g.n_segments:>6d} {t1 - t0:>8.3f} {g.hausdorff / tol:>11.3f} "
+            print(f"{name:>15} {rel:>8.0e} {g.n_segments:>6d} {t1 - t0:>8.3f} {g.hausdorff / tol:>11.3f} "
                   f"{m.n_segments:>5d} {t2 - t1:>8.3f} {m.hausdorff / tol:>11.3f} "
                   f"{m.n_segments / g.n_segments:>10.2f}")
     return rows

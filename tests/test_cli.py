@@ -598,9 +598,9 @@ def test_ctrl_c_stops_the_planner_and_its_workers_with_one_line(tmp_path, whom):
 
 def test_progress_of_two_kinds_keeps_each_count_on_a_line_of_its_own(capsys):
     # the planner's batches report while sections are traced: neither overwrites the other's count
-    from skatetrace.cli.commands import _StatusLine
+    from skatetrace.cli.status import StatusLine
 
-    status = _StatusLine()
+    status = StatusLine()
     status.show("sections", "tracing sections 1/3", False)
     status.show("warm starts", "planning: warm starts solved 1/2", False)
     status.show("warm starts", "planning: warm starts solved 2/2", True)
@@ -608,3 +608,22 @@ def test_progress_of_two_kinds_keeps_each_count_on_a_line_of_its_own(capsys):
     status.show("sections", "tracing sections 3/3", True)
     shown = [line.split("\r")[-1] for line in capsys.readouterr().err.split("\n")]  # what a terminal keeps
     assert shown == ["tracing sections 1/3", "planning: warm starts solved 2/2", "tracing sections 3/3", ""]
+
+
+def test_a_long_fit_shows_its_pieces_and_a_short_one_nothing(capsys, monkeypatch):
+    # a drawing of 20,000 lines fitted for tens of seconds in silence; one that fits within a
+    # second (nearly all) prints nothing
+    from skatetrace.cli import status
+
+    clock = iter([0.0, 0.3, 0.6, 0.9] + [10.0, 10.5, 11.0, 11.5, 12.0, 12.5])
+    monkeypatch.setattr(status.time, "perf_counter", lambda: next(clock))
+    fit = status.LongFit(status.StatusLine())
+    for done in (0, 100, 200):
+        fit("fitting", done, 300)
+    fit("fitting", 300, 300)  # within a second: nothing
+    assert capsys.readouterr().err == ""
+    for stage, done in (("splitting", 0), ("fitting", 0), ("fitting", 5000), ("merging", 0), ("fitting", 20000)):
+        fit(stage, done, 20000)
+    shown = [line.split("\r")[-1] for line in capsys.readouterr().err.split("\n")]
+    assert shown == ["fitting: 5000/20000 pieces of the drawing", "merging: 0/20000 pieces of the drawing",
+                     "fitting: 20000/20000 pieces of the drawing", ""]

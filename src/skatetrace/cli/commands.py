@@ -12,7 +12,7 @@ import dataclasses
 import math
 import sys
 import time
-from contextlib import contextmanager, nullcontext
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import SkatetraceError
@@ -24,6 +24,7 @@ from ..dynamics.presets import REACH_PER_HEIGHT
 from ..tracing.sections import TraceOptions
 from .robustness import add_parser as _add_robustness_parser
 from .robustness import run as _robustness
+from .status import LongFit, StatusLine, planning_progress
 from .values import figure_length
 
 __all__ = ["build_parser", "main"]
@@ -197,11 +198,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _resolve(args, name: str):
+    from ..drawings.fitting import reporting
     from ..drawings.sources import resolve
 
-    return resolve(name, size=args.size, tol=args.tol, method=args.method, height=args.height, blade=args.blade,
-                   edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass,
-                   exact=args.exact, paths=getattr(args, "paths", None))
+    with reporting(LongFit(StatusLine())):
+        return resolve(name, size=args.size, tol=args.tol, method=args.method, height=args.height, blade=args.blade,
+                       edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass,
+                       exact=args.exact, paths=getattr(args, "paths", None))
 
 
 def _exact_summary(res) -> dict | None:
@@ -350,29 +353,6 @@ def _unplanned_if_better(done, figure, params, options, args, limits, progress):
     return again, unbounded
 
 
-class _StatusLine:
-    """A line of progress on stderr, redrawn in place; progress of another kind starts a line of its own."""
-
-    def __init__(self) -> None:
-        self.kind: str | None = None
-
-    def show(self, kind: str, text: str, last: bool) -> None:
-        if self.kind not in (None, kind):
-            print(file=sys.stderr)  # keep the other kind's count where it stopped
-        print(f"\r{text}", end="\n" if last else "", file=sys.stderr, flush=True)
-        self.kind = None if last else kind
-
-
-def _planning_progress(options: TraceOptions, status: _StatusLine):
-    """A block within which the planner's programs show on standard error as they are solved (nothing without a reach)."""
-    if options.reach is None:
-        return nullcontext()
-    from ..planning.pool import reporting
-
-    return reporting(lambda stage, done, total: status.show(stage, f"planning: {stage} solved {done}/{total}",
-                                                            done == total))
-
-
 def _trace(args) -> int:
     from ..outputs.results import write_results
     from ..pipeline import trace_and_verify
@@ -394,14 +374,14 @@ def _trace(args) -> int:
     for note in res.notes:
         print(f"note: {note}")
 
-    status = _StatusLine()
+    status = StatusLine()
 
     def progress(done, total):
         # the line ends with the round, so that what verification says (compiling, first time) starts a line
         status.show("sections", f"tracing sections {done}/{total}", done == total)
 
     limits = _human_limits(args, res, params)
-    with _planning_progress(options, status):
+    with planning_progress(options, status):
         done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
                                 progress=progress)
     if args.reach is None and options.reach is not None and not all(s.success for s in done.trace.sections):

@@ -105,14 +105,19 @@ def _elements(poses: Sequence[Pose], segs: Sequence[Segment]):
 
 def _sample_window(pieces: Sequence[Piece], window: Sequence[tuple[int, float, float]], poses: Sequence[Pose],
                    segs: Sequence[Segment]) -> list[_Samples]:
-    """17 samples, equally spaced in ``t``, on every sub-span of the window, with their distances to the chain."""
+    """17 samples, equally spaced in ``t``, on every sub-span of the window, with their distances to the chain.
+
+    The distances of all the window's samples are one call (a window of thousands of lines, as
+    the fit's merge pass certifies, spent most of its time in per-piece calls).
+    """
+    ts = [np.linspace(ta, tb, 17) for _pi, ta, tb in window]
+    pts = [pieces[pi].point(t) for (pi, _ta, _tb), t in zip(window, ts)]
+    f_all, idx_all = _chain_dist(np.hstack(pts), poses, segs)
     subs = []
-    for pi, ta, tb in window:
+    for n, ((pi, _ta, _tb), t, p) in enumerate(zip(window, ts, pts)):
         piece = pieces[pi]
-        t = np.linspace(ta, tb, 17)
-        p = piece.point(t)
-        f, idx = _chain_dist(p, poses, segs)
-        subs.append(_Samples(pi, piece, t, p, f, idx, _gl_lengths(piece, t[:-1], t[1:])))
+        part = slice(17 * n, 17 * n + 17)
+        subs.append(_Samples(pi, piece, t, p, f_all[part], idx_all[part], _gl_lengths(piece, t[:-1], t[1:])))
     return subs
 
 

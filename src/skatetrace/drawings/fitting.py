@@ -9,8 +9,9 @@ The chain, from a :class:`~skatetrace.drawings.curves.Path` to a :class:`~skatet
 2. :func:`fit_path` (this module) replaces every run by a G1 chain of circular arcs and lines
    (:class:`~skatetrace.figures.geometry.Segment`): biarcs (:mod:`.biarcs`) interpolating the
    curve's points and unit tangents at breakpoints, the breakpoints chosen greedily (halve a span at
-   its arc-length midpoint until its biarc is within ``tol``) or for the fewest arcs (a shortest path
-   over candidate breakpoints, after Drysdale, Rote & Sturm). Every biarc carries a certified upper
+   its arc-length midpoint until its biarc is within ``tol``, then merge runs of whole spans into one
+   biarc where that is certified and shorter: :meth:`_Fitter.merged`) or for the fewest arcs (a
+   shortest path over candidate breakpoints, after Drysdale, Rote & Sturm). Every biarc carries a certified upper
    bound on its Hausdorff distance to the stretch of curve it replaces (:mod:`.certify`), so the
    bound of the whole fit is certified too. The results are :mod:`.fit_results`.
 3. :func:`~skatetrace.drawings.to_figure.figure_from_fit` turns a fit into a figure.
@@ -41,17 +42,36 @@ from .fit_results import DrawingFit, FitStatus, FittedRun, Knot, PathFit, Where
 from .splitting import Run, _direction, _split
 from ..errors import FitError
 from ..figures.geometry import Pose, Segment
+from ..progress import Channel
 
-__all__ = ["fit_path", "fit_drawing"]
+__all__ = ["fit_path", "fit_drawing", "reporting"]
 
 MIN_SPAN = 1e-9  # relative to the size: a span shorter than this is not halved again (the fit then fails)
 MAX_INTERVALS = 100_000  # biarcs per path before the fit gives up
 MIN_DENSITY = 6  # candidate breakpoints per greedy biarc for the minimum-count fit
 MIN_BUDGET = 30  # certificates per greedy biarc the minimum-count search may spend before keeping greedy's
 MIN_PIECE_BUDGET = 100  # source pieces certified (over all its windows) per greedy biarc, likewise
+MERGE_SPANS = 1024  # whole spans one biarc of the merge pass may replace at most
 
 
 _Loc = tuple  # (span index within the run, t on that span's piece)
+
+# A drawing's fit, piece by piece (see reporting).
+_PROGRESS = Channel("fitting")
+#: Spans fitted (or tried for merging) between two reports.
+_REPORT_EVERY = 200
+
+
+def reporting(report):
+    """Within the ``with`` block, call ``report(stage, done, total)`` as :func:`fit_drawing` goes.
+
+    ``stage`` is ``"splitting"`` (into runs and spans), ``"fitting"`` (greedy's biarcs) or
+    ``"merging"`` (its merge pass), ``done`` of the
+    drawing's ``total`` source pieces are behind it (reported every few hundred spans and at the end
+    of each path: a drawing of 20,000 lines takes tens of seconds). Per thread and task, like
+    :func:`skatetrace.planning.pool.reporting` (:class:`skatetrace.progress.Channel`).
+    """
+    return _PROGRESS.listening(report)
 
 
 class _Interval(NamedTuple):
@@ -131,8 +151,10 @@ class _Budget:
 class _Fitter:
     """Everything one path's fit needs, without globals."""
 
-    def __init__(self, path: Path, scale: float, tol: float):
+    def __init__(self, path: Path, scale: float, tol: float, where: tuple[int, int] | None = None):
         self.path, self.pieces, self.scale, self.tol = path, path.pieces, scale, tol
+        # (pieces of the drawing before this path, the drawing's pieces): for reporting
+        self.where = (0, len(path.pieces)) if where is None else where
         self.slack = tol / 8.0
         self.budget = _Budget()
         self.failures: list[str] = []
@@ -180,11 +202,18 @@ class _Fitter:
             k = 0.0
         return (Segment(k, L),)
 
+    def report(self, stage: str, piece: int) -> None:
+        """Report the drawing's pieces before this path's ``piece`` done."""
+        if _PROGRESS.listened:
+            _PROGRESS.report(stage, self.where[0] + piece, self.where[1])
+
     def greedy(self, geom: _RunGeom) -> list[_Interval]:
         """Halve each spiral span at its arc-length midpoint until every biarc is within ``tol``."""
         out: list[_Interval] = []
         min_len = MIN_SPAN * self.scale
         for k, sp in enumerate(geom.spans):
+            if k % _REPORT_EVERY == 0:
+                self.report("fitting", sp.piece)
             stack = [((k, sp.t0), (k, sp.t1))]
             while stack:
                 a, b = stack.pop()
@@ -211,6 +240,81 @@ class _Fitter:
                 stack.append(((k, tm), b))
                 stack.append((a, (k, tm)))
         return out
+
+    def merged(self, geom: _RunGeom, intervals: list[_Interval]) -> list[_Interval]:
+        """Consecutive whole spans replaced by one biarc wherever it is certified and has fewer segments.
+
+        Greedy fits each span on its own, so a dense polyline (a circle drawn as 2,500 lines, a
+        point list of a curve) comes out with a segment per source segment, however little it
+        turns: 2,500 pieces to trace, each from rest to rest where it is a section of its own. Here,
+        from each whole span on, the biarc over the next whole spans is tried over windows doubling
+        in size (then halved back to the longest certified one), and kept where its certificate is
+        within ``tol`` and it replaces more segments than it has. Spans greedy had to halve are left
+        as they are (their own fit is already as long as a biarc goes), and so are failed ones.
+        Each try certifies every source piece of its window: about ``2 + log2(w)`` certifications of
+        each piece for windows of ``w`` spans.
+        """
+        n = len(intervals)
+        whole = [iv.cert.ok and iv.a[0] == iv.b[0] and iv.a[1] == geom.spans[iv.a[0]].t0
+                 and iv.b[1] == geom.spans[iv.b[0]].t1 for iv in intervals]
+        if sum(whole) < 3:
+            return intervals
+        counts = np.concatenate([[0], np.cumsum([len(iv.segs) for iv in intervals])])
+        out: list[_Interval] = []
+        i, reported = 0, -_REPORT_EVERY
+        while i < n:
+            if i - reported >= _REPORT_EVERY:
+                self.report("merging", geom.spans[intervals[i].a[0]].piece)
+                reported = i
+            last = i  # the last interval of the run of whole spans from i (at most MERGE_SPANS)
+            while whole[i] and last + 1 < n and whole[last + 1] and last + 1 - i < MERGE_SPANS:
+                last += 1
+            first = int(np.searchsorted(counts, counts[i] + 3, side="left")) - 1  # covers 3 segments
+            if not whole[i] or first > last:
+                out.append(intervals[i])
+                i += 1
+                continue
+
+            def attempt(j: int) -> _Interval | None:
+                p0, p1 = geom.data(intervals[i].a), geom.data(intervals[j].b)
+                segs = _biarc(*p0, *p1)
+                if segs is None or len(segs) >= counts[j + 1] - counts[i]:
+                    return None
+                cert = self.certify(geom, intervals[i].a, intervals[j].b, p0, segs, tight=False)
+                return _Interval(intervals[i].a, intervals[j].b, segs, cert) if cert.ok else None
+
+            good, bad, j = None, None, first
+            while True:
+                got = attempt(j)
+                if got is None:
+                    bad = j
+                    break
+                good = (j, got)
+                if j == last:
+                    break
+                j = min(last, i + 2 * (j - i + 1) - 1)
+            if good is not None and bad is not None:
+                lo, hi = good[0], bad  # lo certified, hi not
+                while hi - lo > 1:
+                    mid = (lo + hi) // 2
+                    got = attempt(mid)
+                    if got is None:
+                        hi = mid
+                    else:
+                        lo, good = mid, (mid, got)
+            if good is None:
+                out.append(intervals[i])
+                i += 1
+                continue
+            j, iv = good
+            iv = iv._replace(cert=self.certify(geom, iv.a, iv.b, geom.data(iv.a), iv.segs))
+            if not iv.cert.ok:  # refined towards the samples, a bound only ever tightens; kept in case
+                out.append(intervals[i])
+                i += 1
+                continue
+            out.append(iv)
+            i = j + 1
+        return out if len(out) < n else intervals
 
     def _fallback(self, geom: _RunGeom, a: _Loc, b: _Loc) -> _Interval:
         """A failed, unsplittable stretch: a biarc is undefined, so keep a line along the start direction."""
@@ -490,17 +594,28 @@ def fit_path(path: Path, tol: float, *, method: str = "greedy", corner_tol_deg: 
     >>> fit.success, fit.hausdorff <= 1e-3, fit.n_arcs
     (True, True, 10)
     """
+    return _fit_path(path, tol, method, corner_tol_deg)
+
+
+def _fit_path(path: Path, tol, method, corner_tol_deg, where: tuple[int, int] | None = None) -> PathFit:
+    """:func:`fit_path`, reporting progress as the pieces ``where[0]:`` of a drawing of ``where[1]`` pieces."""
     tol = _check_tol(tol)
     method = _check_method(method)
     try:
-        runs, prep = _split(path, corner_tol_deg, tol)
-        return _fit_runs(path, runs, prep.scale, tol, method)
+        before, total = (0, None) if where is None else where
+
+        def split_progress(piece: int) -> None:
+            _PROGRESS.report("splitting", before + piece, len(path.pieces) if total is None else total)
+
+        runs, prep = _split(path, corner_tol_deg, tol, progress=split_progress)
+        return _fit_runs(path, runs, prep.scale, tol, method, where)
     except ArithmeticError as exc:  # overflow in a user's piece, say; never a wrong answer
         raise FitError(f"path {path.name!r}: numerical failure while fitting ({exc})") from exc
 
 
-def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str) -> PathFit:
-    fitter = _Fitter(path, scale, tol)
+def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str,
+              where: tuple[int, int] | None = None) -> PathFit:
+    fitter = _Fitter(path, scale, tol, where)
     fitted: list[FittedRun] = []
     certs_all: list[list[_Cert]] = []
     gcount, mcount = 0, 0
@@ -513,7 +628,17 @@ def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str
                 free_start, free_end = run.corner != 0.0, nxt != 0.0
                 geom = _RunGeom(path.pieces, run)
                 greedy = fitter.greedy(geom)
-                fr, certs = fitter.realise(geom, greedy, free_start, free_end)
+                merged = fitter.merged(geom, greedy)
+                fr, certs = fitter.realise(geom, merged, free_start, free_end)
+                if merged is not greedy and fr.hausdorff > tol:
+                    # laid out one after another, the merged biarcs may drift from where they were
+                    # certified (a snapped line, say) beyond the tolerance, where greedy's own may not
+                    alone = fitter.realise(geom, greedy, free_start, free_end)
+                    if alone[0].hausdorff < fr.hausdorff:
+                        fitter.notes.append("spans merged drifted beyond the tolerance when laid out; kept greedy's")
+                        fr, certs = alone
+                        merged = greedy
+                greedy = merged
                 gcount += len(fr.segments)
                 if method == "min":
                     best = fitter.minimum(geom, greedy)
@@ -535,7 +660,7 @@ def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str
         fitted[r] = dataclasses.replace(fitted[r], corner=corner)
     if status is FitStatus.TOO_MANY_ARCS:
         message = f"path {path.name!r}: {status.value} ({MAX_INTERVALS}); loosen tol (was {tol:.3g})"
-        warnings.warn(message, RuntimeWarning, stacklevel=3)
+        warnings.warn(message, RuntimeWarning, stacklevel=4)
         return PathFit(success=False, status=status, message=message, runs=(), hausdorff=math.inf,
                        hausdorff_sampled=math.inf, where=None, n_arcs=0, n_lines=0,
                        curve_length=sum(g.curve_length for g in fitted), spline_length=0.0, tol=tol, method=method,
@@ -556,7 +681,7 @@ def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str
         status = FitStatus.SUBDIVISION_LIMIT
         message = f"path {path.name!r}: {status.value}: " + "; ".join(fitter.failures[:3] or [
             f"bound {hausdorff:.3g} > tol {tol:.3g}"])
-        warnings.warn(message, RuntimeWarning, stacklevel=3)
+        warnings.warn(message, RuntimeWarning, stacklevel=4)
     return PathFit(
         success=success, status=status, message=message, runs=tuple(fitted), hausdorff=hausdorff,
         hausdorff_sampled=max((c.sampled for cs in certs_all for c in cs), default=0.0), where=where,
@@ -582,7 +707,10 @@ def fit_drawing(drawing: Drawing, tol: float, *, method: str = "greedy", corner_
         raise FitError(f"expected a skatetrace.drawings.curves.Drawing, got {type(drawing).__name__}")
     tol = _check_tol(tol)
     method = _check_method(method)
-    fits = tuple(fit_path(p, tol, method=method, corner_tol_deg=corner_tol_deg) for p in drawing.paths)
+    total = sum(len(p.pieces) for p in drawing.paths)
+    before = np.concatenate([[0], np.cumsum([len(p.pieces) for p in drawing.paths])]).astype(int).tolist()
+    fits = tuple(_fit_path(p, tol, method, corner_tol_deg, (before[i], total)) for i, p in enumerate(drawing.paths))
+    _PROGRESS.report("fitting", total, total)
     worst = max(range(len(fits)), key=lambda i: fits[i].hausdorff)
     bad = [f"path {i} ({f.name!r}): {f.message}" for i, f in enumerate(fits) if not f.success]
     success = not bad

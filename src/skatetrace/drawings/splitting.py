@@ -245,8 +245,12 @@ def _ranges(path: Path, prep: _Prepared, tip: float = 0.0) -> list[_Range]:
     return out
 
 
-def _split(path: Path, corner_tol_deg: float, tol: float = 0.0) -> tuple[list[Run], _Prepared]:
-    """:func:`split_path`, and the path's size; ``tol`` (the fit's tolerance) makes hairpins tighter than it cusps."""
+def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None) -> tuple[list[Run], _Prepared]:
+    """:func:`split_path`, and the path's size; ``tol`` (the fit's tolerance) makes hairpins tighter than it cusps.
+
+    ``progress(piece)``, if given, is called every few hundred pieces split (a path of 20,000 lines
+    takes seconds).
+    """
     if not (isinstance(corner_tol_deg, (int, float)) and math.isfinite(corner_tol_deg)
             and 0 <= corner_tol_deg < 180):
         raise FitError(f"corner_tol_deg must be in [0, 180) degrees, got {corner_tol_deg!r}")
@@ -292,6 +296,8 @@ def _split(path: Path, corner_tol_deg: float, tol: float = 0.0) -> tuple[list[Ru
     runs: list[list[Span]] = []
     corners: list[float | None] = []
     for j, r in enumerate(ranges):
+        if progress is not None and j % 200 == 0:
+            progress(r.piece)
         spans = _spiral_spans(pieces[r.piece], r.piece, r.a, r.b, math.atan2(dirs_in[j][1], dirs_in[j][0]),
                               math.atan2(dirs_out[j][1], dirs_out[j][0]), reason[j],
                               piece_length(pieces[r.piece], r.a, r.b, 64))

@@ -15,32 +15,26 @@ Whoever wants to see a long planning run move (the command line) registers a cal
 from __future__ import annotations
 
 import contextlib
-import contextvars
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 from ..processes import DEFAULT_MAX_WORKERS, available_workers, run_jobs
+from ..progress import Channel
 from .collocation import ProgramSolution, solve_program
 
 __all__ = ["available_workers", "solve_programs", "reporting", "DEFAULT_MAX_WORKERS"]
 
-# The callback told of every program solved (see reporting), or None.
-_REPORT: contextvars.ContextVar[Callable[[str, int, int], None] | None] = contextvars.ContextVar(
-    "_REPORT", default=None)
+# The planner's batches, program by program (see reporting).
+_PROGRESS = Channel("planning")
 
 
-@contextlib.contextmanager
-def reporting(report: Callable[[str, int, int], None]) -> Iterator[None]:
+def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractContextManager[None]:
     """Within the ``with`` block, call ``report(stage, done, total)`` after each program a batch solves.
 
     ``stage`` names the batch (``"warm starts"``, ``"linked programs"``, ``"programs again"``),
     ``done`` of its ``total`` programs are solved. The registration is per thread and per task (a
-    context variable); an inner block replaces an outer one.
+    context variable); an inner block replaces an outer one (:class:`skatetrace.progress.Channel`).
     """
-    token = _REPORT.set(report)
-    try:
-        yield
-    finally:
-        _REPORT.reset(token)
+    return _PROGRESS.listening(report)
 
 
 def _solve(job: tuple) -> ProgramSolution:
@@ -66,10 +60,8 @@ def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "
     list of ProgramSolution
         One per job, in the order of ``jobs``.
     """
-    report = _REPORT.get()
     out = []
     for sol in run_jobs(_solve, jobs, workers):
         out.append(sol)
-        if report is not None:
-            report(stage, len(out), len(jobs))
+        _PROGRESS.report(stage, len(out), len(jobs))
     return out
