@@ -213,6 +213,71 @@ def test_a_tiny_kink_becomes_a_corner_when_keeping_it_smooth_would_break_the_fit
     assert not any("made corners" in n for n in plain.notes)
 
 
+def _polyline_svg(tmp_path, pts, closed=False, name="poly"):
+    tag = "polygon" if closed else "polyline"
+    path = tmp_path / f"{name}.svg"
+    path.write_text(f'<svg xmlns="http://www.w3.org/2000/svg"><{tag} points="'
+                    + " ".join(f"{float(x)!r},{float(y)!r}" for x, y in pts) + '" stroke="black" fill="none"/></svg>')
+    return path
+
+
+def test_a_circle_drawn_as_a_polygon_is_one_smooth_run_not_a_stop_at_every_vertex(tmp_path):
+    # vpype-circle-3cm.svg: 189 lines, joins of 1.9 degrees (above the 0.5 of a corner) between
+    # lines of 10 cm at 6 m: each was a corner, so 189 sections from rest to rest. Rounded within
+    # half the tolerance (1.9 deg * 10 cm / 8 = 0.4 mm at 1 mm), it is one run of a few arcs.
+    n = 189
+    th = 2 * np.pi * np.arange(n) / n
+    r = resolve(str(_polyline_svg(tmp_path, zip(np.cos(th), np.sin(th)), closed=True)), size="6m", tol="1mm")
+    assert r.fit.success and r.fit.hausdorff <= 1e-3
+    assert len(r.fit.paths[0].runs) == 1 and r.fit.n_arcs + r.fit.n_lines <= 8
+    assert len(r.figure.curves[0].sections()) == 1
+    from skatetrace.drawings.fitting import fit_drawing
+    sharp = fit_drawing(r.drawing, 1e-3, soft_corners=False)  # as before: a corner at every vertex
+    assert len(sharp.paths[0].runs) == n
+
+
+@pytest.mark.parametrize("side, turn_deg, corner", [
+    (0.05, 1.0, False),  # short lines, a small turn: 4 * 1 mm / 5 cm = 4.6 degrees allowed
+    (0.05, 4.0, False),
+    (0.05, 6.0, True),   # above SOFT_MAX_DEG (5): a corner the drawing meant, however short the lines
+    (3.0, 1.0, True),    # long lines: 4 * 1 mm / 3 m = 0.08 degrees allowed
+    (0.2, 1.0, False),   # 1.1 degrees allowed
+    (0.2, 2.0, True),
+])
+def test_a_join_is_soft_only_where_the_fit_can_round_it_within_the_tolerance(tmp_path, side, turn_deg, corner):
+    # three lines of `side` metres (in a drawing 6 m across), turning by `turn_deg` at each join
+    from skatetrace.drawings.splitting import split_path, _split
+
+    pts, heading, x, y = [(0.0, 0.0)], 0.0, 0.0, 0.0
+    for _ in range(3):
+        x, y = x + side * np.cos(heading), y + side * np.sin(heading)
+        pts.append((x, y))
+        heading += np.radians(turn_deg)
+    pts.append((6.0, -1.0))  # the drawing's size: 6 m (a corner of its own)
+    from skatetrace.drawings.curves import LinePiece, Path as CurvePath
+    path = CurvePath(tuple(LinePiece(a, b) for a, b in zip(pts, pts[1:])))
+    runs, _prep = _split(path, 0.5, 1e-3, soft=True)
+    first_joins = [sp.reason for sp in runs[0].spans]
+    assert (first_joins.count("join") < 2) == corner, first_joins
+    assert len(split_path(path)) == len(pts) - 1  # without softening every join above 0.5 degrees is a corner
+
+
+def test_soft_joins_that_add_up_beyond_the_tolerance_are_corners_again(tmp_path, monkeypatch):
+    # softened generously, joins of 4 degrees between 20 cm lines bend the run by 1.7 mm a line at
+    # 1 mm: the fit fails, and the drawing is fitted again with those joins as corners, as before
+    from skatetrace.drawings import splitting
+
+    monkeypatch.setattr(splitting, "SOFT_SHARE", 1e3)
+    pts, heading, x, y = [(0.0, 0.0)], 0.0, 0.0, 0.0
+    for k in range(30):
+        x, y = x + 0.2 * np.cos(heading), y + 0.2 * np.sin(heading)
+        pts.append((x, y))
+        heading += np.radians(4.0 if k % 6 < 3 else -4.0)
+    r = resolve(str(_polyline_svg(tmp_path, pts)), size="6m", tol="1mm")
+    assert r.fit.success and r.fit.hausdorff <= 1e-3
+    assert len(r.fit.paths[0].runs) == len(pts) - 1  # every join a corner again
+
+
 def test_paths_are_picked_by_id_or_subpath_name(tmp_path, capsys):
     path = tmp_path / "two.svg"
     path.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path id="a" d="M0 0 L 10 0 M 0 5 L 10 5" stroke="black"/>'

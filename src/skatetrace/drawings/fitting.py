@@ -543,7 +543,8 @@ def _check_method(method) -> str:
     return method
 
 
-def fit_path(path: Path, tol: float, *, method: str = "greedy", corner_tol_deg: float = 0.5) -> PathFit:
+def fit_path(path: Path, tol: float, *, method: str = "greedy", corner_tol_deg: float = 0.5,
+             soft_corners: bool = True) -> PathFit:
     """Approximate a path by G1 arc splines within a certified Hausdorff distance ``tol``.
 
     Parameters
@@ -557,6 +558,10 @@ def fit_path(path: Path, tol: float, *, method: str = "greedy", corner_tol_deg: 
         keeps whichever of the two uses fewer segments.
     corner_tol_deg : float
         See :func:`~skatetrace.drawings.splitting.split_path`.
+    soft_corners : bool
+        Also join smoothly where a sharper turn between short pieces can be rounded within half of
+        ``tol`` (up to :data:`~skatetrace.drawings.splitting.SOFT_MAX_DEG`): a circle drawn as a
+        polygon of a few hundred sides is then one run, not a corner at every vertex.
 
     Returns
     -------
@@ -594,10 +599,10 @@ def fit_path(path: Path, tol: float, *, method: str = "greedy", corner_tol_deg: 
     >>> fit.success, fit.hausdorff <= 1e-3, fit.n_arcs
     (True, True, 10)
     """
-    return _fit_path(path, tol, method, corner_tol_deg)
+    return _fit_path(path, tol, method, corner_tol_deg, soft_corners)
 
 
-def _fit_path(path: Path, tol, method, corner_tol_deg, where: tuple[int, int] | None = None) -> PathFit:
+def _fit_path(path: Path, tol, method, corner_tol_deg, soft: bool, where: tuple[int, int] | None = None) -> PathFit:
     """:func:`fit_path`, reporting progress as the pieces ``where[0]:`` of a drawing of ``where[1]`` pieces."""
     tol = _check_tol(tol)
     method = _check_method(method)
@@ -607,7 +612,7 @@ def _fit_path(path: Path, tol, method, corner_tol_deg, where: tuple[int, int] | 
         def split_progress(piece: int) -> None:
             _PROGRESS.report("splitting", before + piece, len(path.pieces) if total is None else total)
 
-        runs, prep = _split(path, corner_tol_deg, tol, progress=split_progress)
+        runs, prep = _split(path, corner_tol_deg, tol, progress=split_progress, soft=soft)
         return _fit_runs(path, runs, prep.scale, tol, method, where)
     except ArithmeticError as exc:  # overflow in a user's piece, say; never a wrong answer
         raise FitError(f"path {path.name!r}: numerical failure while fitting ({exc})") from exc
@@ -691,7 +696,8 @@ def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str
         closed=path.closed, name=path.name, size=scale)
 
 
-def fit_drawing(drawing: Drawing, tol: float, *, method: str = "greedy", corner_tol_deg: float = 0.5) -> DrawingFit:
+def fit_drawing(drawing: Drawing, tol: float, *, method: str = "greedy", corner_tol_deg: float = 0.5,
+                soft_corners: bool = True) -> DrawingFit:
     """Fit every path of a drawing (see :func:`fit_path`); ``tol`` is in the drawing's units.
 
     Examples
@@ -709,7 +715,8 @@ def fit_drawing(drawing: Drawing, tol: float, *, method: str = "greedy", corner_
     method = _check_method(method)
     total = sum(len(p.pieces) for p in drawing.paths)
     before = np.concatenate([[0], np.cumsum([len(p.pieces) for p in drawing.paths])]).astype(int).tolist()
-    fits = tuple(_fit_path(p, tol, method, corner_tol_deg, (before[i], total)) for i, p in enumerate(drawing.paths))
+    fits = tuple(_fit_path(p, tol, method, corner_tol_deg, soft_corners, (before[i], total))
+                 for i, p in enumerate(drawing.paths))
     _PROGRESS.report("fitting", total, total)
     worst = max(range(len(fits)), key=lambda i: fits[i].hausdorff)
     bad = [f"path {i} ({f.name!r}): {f.message}" for i, f in enumerate(fits) if not f.success]

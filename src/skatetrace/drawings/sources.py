@@ -303,12 +303,18 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
                              f"{' ...' if len(moves) > 5 else ''}")
         if fit is None or not fit.success:
             fit = fit_drawing(fitted, fit_tol, method=method)
+        if not fit.success:
+            # joins rounded because they turn little for their pieces' length (soft corners) can
+            # still add up along a run beyond the tolerance: then they are corners, as they were
+            sharp = fit_drawing(fitted, fit_tol, method=method, soft_corners=False)
+            if sharp.success:
+                fit, caught = sharp, []
     tight = _kink_corner_deg(drawing, tol_v)
     if not fit.success and tight < EXACT_MAX_CORNER_DEG:
         # The arc spline is tangent-continuous through a smooth join, so a join that turns by delta
         # displaces the rest of its run by about delta times its length: where that breaks the fit,
         # every join that could cost a tenth of the tolerance is made a corner (a rest) instead.
-        retry = fit_drawing(fitted, fit_tol, method=method, corner_tol_deg=tight)
+        retry = fit_drawing(fitted, fit_tol, method=method, corner_tol_deg=tight, soft_corners=False)
         if retry.success:
             notes.append(f"joins turning by more than {tight:.2g} degrees made corners (rests): kept smooth, "
                          f"they moved the rest of their curve by more than the tolerance ({fit.message})")

@@ -38,6 +38,14 @@ CUSP_RADIUS = 1e-10  # a speed minimum whose radius bound |r'|^2/|r''| is below 
 TIP_RADIUS = 1 / 8
 TIP_REACH = 1.0
 TIP_TURN_DEG = 150.0
+# The arc fit (``soft``): a join turning by delta between pieces of lengths l1, l2 is also smooth
+# where the fit can round it well within the tolerance, delta <= SOFT_SHARE * tol / min(l1, l2): the
+# chain through it then bends by delta over a piece, off by about l * delta / 8 (half the
+# tolerance). Never above SOFT_MAX_DEG: a turn sharper than that is a corner the drawing meant.
+# A circle drawn as 189 lines (vpype-circle-3cm.svg, joins of 1.9 degrees) is a circle, not 189
+# stops.
+SOFT_SHARE = 4.0
+SOFT_MAX_DEG = 5.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -245,11 +253,13 @@ def _ranges(path: Path, prep: _Prepared, tip: float = 0.0) -> list[_Range]:
     return out
 
 
-def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None) -> tuple[list[Run], _Prepared]:
+def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None,
+           soft: bool = False) -> tuple[list[Run], _Prepared]:
     """:func:`split_path`, and the path's size; ``tol`` (the fit's tolerance) makes hairpins tighter than it cusps.
 
     ``progress(piece)``, if given, is called every few hundred pieces split (a path of 20,000 lines
-    takes seconds).
+    takes seconds). ``soft`` (the arc fit's) also joins smoothly where the turn can be rounded well
+    within ``tol`` (:data:`SOFT_SHARE`, :data:`SOFT_MAX_DEG`).
     """
     if not (isinstance(corner_tol_deg, (int, float)) and math.isfinite(corner_tol_deg)
             and 0 <= corner_tol_deg < 180):
@@ -268,7 +278,8 @@ def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None) -
         d_out = _direction(p, r.b, -1, vscale, r.cusp_b)
         dirs_in.append(fallback if d_in is None else d_in)
         dirs_out.append(fallback if d_out is None else d_out)
-    tol = math.radians(corner_tol_deg)
+    lengths = [piece_length(pieces[r.piece], r.a, r.b, 64) for r in ranges]
+    fit_tol, tol = tol, math.radians(corner_tol_deg)
     # Junction j sits between range j-1 and range j; junction 0 is the closure of a closed path.
     corner: list[float | None] = [None] * n
     reason = ["start"] * n
@@ -284,7 +295,9 @@ def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None) -
         u, v = dirs_out[j - 1], dirs_in[j]
         delta = _wrap(math.atan2(u[0] * v[1] - u[1] * v[0], u[0] * v[0] + u[1] * v[1]))
         same_piece = prev.piece == cur.piece and j > 0
-        if abs(delta) <= tol:
+        rounded = soft and abs(delta) <= min(math.radians(SOFT_MAX_DEG),
+                                             SOFT_SHARE * fit_tol / max(min(lengths[j - 1], lengths[j]), 1e-300))
+        if abs(delta) <= tol or (rounded and not same_piece):
             m = u + v
             m = m / math.hypot(m[0], m[1])
             dirs_out[j - 1], dirs_in[j] = m, m
@@ -299,8 +312,7 @@ def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None) -
         if progress is not None and j % 200 == 0:
             progress(r.piece)
         spans = _spiral_spans(pieces[r.piece], r.piece, r.a, r.b, math.atan2(dirs_in[j][1], dirs_in[j][0]),
-                              math.atan2(dirs_out[j][1], dirs_out[j][0]), reason[j],
-                              piece_length(pieces[r.piece], r.a, r.b, 64))
+                              math.atan2(dirs_out[j][1], dirs_out[j][0]), reason[j], lengths[j])
         if j == 0 or reason[j] != "join":
             runs.append(spans)
             corners.append(corner[j])
