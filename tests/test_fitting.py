@@ -219,7 +219,7 @@ def test_merge_keeps_what_greedy_had_to_halve_and_never_adds_segments(monkeypatc
     # drift broke the fit (a bound of 12.8 mm at 1 mm)
     path = polygon(800, 3.0, 1.5)
     merged = fit_path(path, 1e-3)
-    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals: intervals)
+    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals, least=None: intervals)
     greedy = quiet_fit(path, 1e-3)
     assert merged.success and merged.hausdorff <= 1e-3
     assert not greedy.success and greedy.hausdorff > 1e-3
@@ -233,7 +233,7 @@ def test_merge_leaves_smooth_curves_alone(make, monkeypatch):
     path = make()
     tol = 1e-3 * size_of(path)
     fit = fit_path(path, tol)
-    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals: intervals)
+    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals, least=None: intervals)
     alone = fit_path(path, tol)
     assert [r.segments for r in fit.runs] == [r.segments for r in alone.runs]
 
@@ -258,6 +258,42 @@ def test_a_merge_that_drifts_when_laid_out_keeps_greedys_fit(monkeypatch):
     fit = fit_path(polygon(900), 1e-3)
     assert merged_sizes and fit.success and fit.hausdorff <= 1e-3
     assert fit.n_arcs + fit.n_lines == 900 and "kept greedy's" in fit.message
+
+
+def gentle(n, side, turn_deg):
+    """``n`` lines of length ``side``, each turning by ``turn_deg`` from the one before (smooth joins)."""
+    heading, pts = 0.0, [(0.0, 0.0)]
+    for _ in range(n):
+        x, y = pts[-1]
+        pts.append((x + side * math.cos(heading), y + side * math.sin(heading)))
+        heading += math.radians(turn_deg)
+    return Path(tuple(LinePiece(a, b) for a, b in zip(pts, pts[1:])))
+
+
+def test_a_short_stretch_of_lines_is_left_as_drawn_where_it_fits(monkeypatch):
+    # 20 lines of 1 cm turning by 0.2 degrees a join (smooth): the drawing's own pieces; the merge
+    # pass only takes on stretches of MERGE_MIN_SPANS whole spans or more (dense polylines)
+    path = gentle(20, 0.01, 0.2)
+    assert fitting.MERGE_MIN_SPANS > 20
+    kept = fit_path(path, 1e-3)
+    monkeypatch.setattr(fitting, "MERGE_MIN_SPANS", 3)
+    merged = fit_path(path, 1e-3)
+    assert kept.success and merged.success
+    assert kept.n_arcs + kept.n_lines == 20 > merged.n_arcs + merged.n_lines
+
+
+def test_a_short_stretch_that_drifts_as_drawn_is_merged(monkeypatch):
+    # 20 lines of 20 cm turning by 0.3 degrees: laid out one along the other, the lines drift
+    # beyond 1 mm (issue 17's tiny kinks); biarcs over them stay within it
+    path = gentle(20, 0.2, 0.3)
+    fit = fit_path(path, 1e-3)
+    assert fit.success and fit.hausdorff <= 1e-3 and fit.n_arcs + fit.n_lines < 20
+    assert "merged its spans" in fit.message
+    check_structure(path, fit)
+    a, b, spacing = brute_force(path, fit)
+    assert max(a, b - spacing / 2) <= fit.hausdorff + 1e-12
+    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals, least=None: intervals)
+    assert not quiet_fit(path, 1e-3).success  # as it was
 
 
 def test_merge_window_is_bounded(monkeypatch):
@@ -351,7 +387,7 @@ def test_min_count_search_budgets_the_pieces_its_windows_span(monkeypatch, tmp_p
     monkeypatch.setattr(fitting, "MIN_PIECE_BUDGET", 5)
     # greedy's merge pass would make this polygon four arcs (the search would then have nothing to
     # do): without it, greedy's fit is a line per side, the search's worst case
-    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals: intervals)
+    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals, least=None: intervals)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = resolve(str(svg), size="6m", tol="1mm", method="min")

@@ -546,3 +546,46 @@ def test_curves_drawn_alike_share_one_linked_program():
     assert trace.success and len(trace.sections) == 6
     assert all(max(sec.residuals.values()) <= 1e-10 and sec.metrics["reach"] <= 1.0 for sec in trace.sections)
     assert [sec.metrics["link"] for sec in trace.sections] == ["start", "impulse"] * 3
+
+
+def test_sections_without_a_pinned_plan_are_planned_again_side_by_side(monkeypatch):
+    # a section whose pinned warm start fails is planned with free ends, then pinned again from
+    # that plan: one after another (octicons-infinity: two such sections, 14 s) these programs are
+    # now batches of their own, and the warm start is the one the sequential search found
+    from skatetrace.planning import planner
+    from skatetrace.planning.collocation import ProgramSolution
+
+    fig = figure_from_dict(CUSPS["pivot"])
+    popts = planner._program_options(fig.params, st.TraceOptions(reach=1.0))
+    specs, _sections = planner.curve_specs(fig.curves[0])
+    real = planner.solve_programs
+    batches = []
+
+    def pinned_fail(jobs, workers=None, stage=""):
+        # every program pinned at its start, from the default guess, "fails" (IPOPT out of iterations)
+        batches.append((stage, len(jobs)))
+        sols = real(jobs, workers, stage)
+        return [ProgramSolution(success=False, status="Maximum_Iterations_Exceeded", message="mocked")
+                if job[1].start_position is not None and job[2] is None else sol for job, sol in zip(jobs, sols)]
+
+    monkeypatch.setattr(planner, "solve_programs", pinned_fail)
+    direct = []
+    solve_program = planner.solve_program
+    monkeypatch.setattr(planner, "solve_program", lambda *a, **k: direct.append(a) or solve_program(*a, **k))
+    solved = planner._presolved([(specs, popts)], 2)
+    batched, _bad, links = planner._warm_start(specs, popts, solved)
+    assert not direct  # every program came from a batch
+    assert [stage for stage, _n in batches] == ["warm starts", "warm starts with free ends",
+                                                 "warm starts pinned again"]
+    assert batches[1][1] == 2  # both sections, with free ends
+
+    def fail_pinned_alone(sections, options, guess=None, meshes=None):
+        if options.start_position is not None and guess is None:
+            return ProgramSolution(success=False, status="Maximum_Iterations_Exceeded", message="mocked")
+        return solve_program(sections, options, guess=guess, meshes=meshes)
+
+    monkeypatch.setattr(planner, "solve_program", fail_pinned_alone)
+    alone, _bad, links_alone = planner._warm_start(specs, popts, {})  # one after another, as before
+    assert links == links_alone
+    for a, b in zip(batched.states, alone.states):
+        np.testing.assert_array_equal(a, b)

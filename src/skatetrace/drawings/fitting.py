@@ -52,6 +52,7 @@ MIN_DENSITY = 6  # candidate breakpoints per greedy biarc for the minimum-count 
 MIN_BUDGET = 30  # certificates per greedy biarc the minimum-count search may spend before keeping greedy's
 MIN_PIECE_BUDGET = 100  # source pieces certified (over all its windows) per greedy biarc, likewise
 MERGE_SPANS = 1024  # whole spans one biarc of the merge pass may replace at most
+MERGE_MIN_SPANS = 32  # consecutive whole spans a stretch needs before the merge pass touches it
 
 
 _Loc = tuple  # (span index within the run, t on that span's piece)
@@ -241,7 +242,7 @@ class _Fitter:
                 stack.append((a, (k, tm)))
         return out
 
-    def merged(self, geom: _RunGeom, intervals: list[_Interval]) -> list[_Interval]:
+    def merged(self, geom: _RunGeom, intervals: list[_Interval], least: int | None = None) -> list[_Interval]:
         """Consecutive whole spans replaced by one biarc wherever it is certified and has fewer segments.
 
         Greedy fits each span on its own, so a dense polyline (a circle drawn as 2,500 lines, a
@@ -249,17 +250,31 @@ class _Fitter:
         turns: 2,500 pieces to trace, each from rest to rest where it is a section of its own. Here,
         from each whole span on, the biarc over the next whole spans is tried over windows doubling
         in size (then halved back to the longest certified one), and kept where its certificate is
-        within ``tol`` and it replaces more segments than it has. Spans greedy had to halve are left
-        as they are (their own fit is already as long as a biarc goes), and so are failed ones.
+        within ``tol`` and it replaces more segments than it has. Only stretches of at least
+        ``least`` (:data:`MERGE_MIN_SPANS`) whole spans in a row are merged: a drawing's few pieces
+        are its author's (merged, an icon's short runs became long sections that the
+        launch-glide-stop manoeuvres traced more slowly, with rests added where they failed), unless
+        they do not fit as they are (see :func:`_fit_runs`). Spans greedy had to
+        halve are left as they are (their own fit is already as long as a biarc goes), and so are
+        failed ones.
         Each try certifies every source piece of its window: about ``2 + log2(w)`` certifications of
         each piece for windows of ``w`` spans.
         """
+        least = MERGE_MIN_SPANS if least is None else least
         n = len(intervals)
         whole = [iv.cert.ok and iv.a[0] == iv.b[0] and iv.a[1] == geom.spans[iv.a[0]].t0
                  and iv.b[1] == geom.spans[iv.b[0]].t1 for iv in intervals]
-        if sum(whole) < 3:
+        if sum(whole) < max(least, 3):
             return intervals
         counts = np.concatenate([[0], np.cumsum([len(iv.segs) for iv in intervals])])
+        stretch = [0] * n  # the number of whole spans in a row that each whole one is part of
+        k = 0
+        while k < n:
+            end = k
+            while end < n and whole[end]:
+                end += 1
+            stretch[k:end] = [end - k] * (end - k)
+            k = max(end, k + 1)
         out: list[_Interval] = []
         i, reported = 0, -_REPORT_EVERY
         while i < n:
@@ -270,7 +285,7 @@ class _Fitter:
             while whole[i] and last + 1 < n and whole[last + 1] and last + 1 - i < MERGE_SPANS:
                 last += 1
             first = int(np.searchsorted(counts, counts[i] + 3, side="left")) - 1  # covers 3 segments
-            if not whole[i] or first > last:
+            if not whole[i] or first > last or stretch[i] < least:
                 out.append(intervals[i])
                 i += 1
                 continue
@@ -641,8 +656,16 @@ def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, method: str
                     alone = fitter.realise(geom, greedy, free_start, free_end)
                     if alone[0].hausdorff < fr.hausdorff:
                         fitter.notes.append("spans merged drifted beyond the tolerance when laid out; kept greedy's")
-                        fr, certs = alone
-                        merged = greedy
+                        (fr, certs), merged = alone, greedy
+                if fr.hausdorff > tol:
+                    # a short stretch of lines with small kinks, each line laid out along the one
+                    # before, may drift beyond the tolerance where one biarc over them does not
+                    every = fitter.merged(geom, greedy, 3)
+                    if every is not greedy:
+                        tried = fitter.realise(geom, every, free_start, free_end)
+                        if tried[0].hausdorff < fr.hausdorff:
+                            fitter.notes.append("laid out as drawn, a run drifted beyond the tolerance; merged its spans")
+                            (fr, certs), merged = tried, every
                 greedy = merged
                 gcount += len(fr.segments)
                 if method == "min":

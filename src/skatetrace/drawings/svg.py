@@ -60,7 +60,7 @@ from .curves import BezierPiece, Drawing, EllipticArcPiece, LinePiece, Path, Pie
 from .files import file_stem, read_bytes, shorten
 from .lengths import CLOSE_TOL, MAX_COORD, extent
 from .svg_entities import inline_entities
-from .svg_style import (MAX_ELEMENTS, SHAPE_TAGS, Placed, Visibility, check_transforms, expand, local_tag,
+from .svg_style import (MAX_ELEMENTS, Placed, Visibility, check_transforms, expand, local_tag,
                         styled_names, unapplied_rules, visibility)
 from ..errors import DrawingError
 

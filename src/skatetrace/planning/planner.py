@@ -161,24 +161,66 @@ def _warm_options(popts: ProgramOptions, start, end) -> ProgramOptions:
     return dataclasses.replace(popts, start_position=start, end_position=end, closing_turn=None)
 
 
-def _presolved(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: int | None) -> dict:
-    """The pinned warm-start programs of every curve (:func:`_warm_start`), each distinct one solved once.
+def _warm_job(spec: SectionSpec, popts: ProgramOptions, start, end, guess: ProgramSolution | None = None) -> tuple:
+    """The warm-start program of one section, pinned at ``start``/``end`` (None: free), as a job of
+    :func:`~skatetrace.planning.pool.solve_programs`; from ``guess`` (a free plan pulled onto the pins)."""
+    opts = _warm_options(popts, start, end)
+    if guess is not None:
+        opts = _linked_options(opts)
+    return [dataclasses.replace(spec, turn=0.0)], opts, guess, None if guess is None else guess.meshes
 
-    Solved side by side (:func:`~skatetrace.planning.pool.solve_programs`); returns the cache
-    :func:`_warm_start` fills, keyed like it. A curve with a section too large to plan
-    (:func:`~skatetrace.planning.collocation.program_too_large`) is left out: the three turn in
-    exact mode spent 88 s on the programs of four sections beside its fifth, refused.
+
+def _cached(solved: dict, spec: SectionSpec, start, end, reach: float, guessed: bool = False) -> ProgramSolution:
+    """A solved warm-start program of ``solved`` (keyed by :func:`_warm_key`), mirrored to ``spec``'s side."""
+    key, sign = _warm_key(spec, start, end, reach, guessed)
+    sol, solved_sign = solved[key]
+    return sol if sign == solved_sign or not sol.success else _mirrored(sol)
+
+
+def _presolved(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: int | None) -> dict:
+    """The warm-start programs of every curve (:func:`_warm_start`), each distinct one solved once.
+
+    Solved side by side (:func:`~skatetrace.planning.pool.solve_programs`) in up to three batches,
+    as :func:`_warm_start` would one after another: the sections pinned at the cusps; then, for
+    those with no pinned plan, the same sections with free ends; then, from each free plan, the
+    section pinned again. (One after another, octicons-infinity's two sections without a pinned
+    plan took 14 s.) Returns the cache :func:`_warm_start` reads, keyed like it. A curve with a
+    section too large to plan (:func:`~skatetrace.planning.collocation.program_too_large`) is left
+    out: the three turn in exact mode spent 88 s on the programs of four sections beside its
+    fifth, refused.
     """
-    jobs: dict = {}
-    for specs, popts in curves:
+    todo = []  # (spec, start, end, reach, the curve's index) of every section of a curve that can be planned
+    for ci, (specs, popts) in enumerate(curves):
         if any(program_too_large([spec], popts) for spec in specs):
             continue  # the curve cannot be planned (:func:`_warm_start` stops at that section): nothing to solve
         for spec, (start, end) in zip(specs, _cusp_pins(specs, popts.reach, popts.closing_turn)):
-            key, sign = _warm_key(spec, start, end, popts.reach)
-            if key not in jobs:
-                jobs[key] = (([dataclasses.replace(spec, turn=0.0)], _warm_options(popts, start, end), None, None), sign)
-    sols = solve_programs([job for job, _sign in jobs.values()], workers, "warm starts")
-    return {key: (sol, sign) for (key, (_job, sign)), sol in zip(jobs.items(), sols)}
+            todo.append((spec, popts, start, end, ci))
+    solved: dict = {}
+
+    def batch(stage: str, wanted) -> None:
+        jobs: dict = {}
+        for spec, popts, start, end, guess in wanted:
+            key, sign = _warm_key(spec, start, end, popts.reach, guess is not None)
+            if key not in solved and key not in jobs:
+                jobs[key] = (_warm_job(spec, popts, start, end, guess), sign)
+        if not jobs:
+            return
+        sols = solve_programs([job for job, _sign in jobs.values()], workers, stage)
+        solved.update({key: (sol, sign) for (key, (_job, sign)), sol in zip(jobs.items(), sols)})
+
+    batch("warm starts", [(spec, popts, start, end, None) for spec, popts, start, end, _ci in todo])
+    unpinned = [(spec, popts, start, end, ci) for spec, popts, start, end, ci in todo
+                if not _cached(solved, spec, start, end, popts.reach).success]
+    batch("warm starts with free ends", [(spec, popts, None, None, None) for spec, popts, _s, _e, _ci in unpinned])
+    again, stopped = [], set()
+    for spec, popts, start, end, ci in unpinned:
+        free = _cached(solved, spec, None, None, popts.reach)
+        if not free.success:
+            stopped.add(ci)  # :func:`_warm_start` stops at this section: the curve's later ones are not needed
+        elif ci not in stopped:
+            again.append((spec, popts, start, end, free))
+    batch("warm starts pinned again", again)
+    return solved
 
 
 def _warm_start(specs, popts: ProgramOptions, solved: dict | None = None
@@ -197,14 +239,9 @@ def _warm_start(specs, popts: ProgramOptions, solved: dict | None = None
 
     def solve(spec, start, end, guess=None):
         key, sign = _warm_key(spec, start, end, popts.reach, guess is not None)
-        if key not in solved:
-            opts = _warm_options(popts, start, end)
-            if guess is not None:  # a free plan of the same section, pulled onto the pins
-                opts = _linked_options(opts)
-            solved[key] = (solve_program([dataclasses.replace(spec, turn=0.0)], opts, guess=guess,
-                                         meshes=None if guess is None else guess.meshes), sign)
-        sol, solved_sign = solved[key]
-        return sol if sign == solved_sign or not sol.success else _mirrored(sol)
+        if key not in solved:  # with guess: a free plan of the same section, pulled onto the pins
+            solved[key] = (solve_program(*_warm_job(spec, popts, start, end, guess)), sign)
+        return _cached(solved, spec, start, end, popts.reach, guess is not None)
 
     large = next((k for k, spec in enumerate(specs) if program_too_large([spec], popts)), None)
     if large is not None:
