@@ -30,7 +30,8 @@ _PROGRESS = Channel("planning")
 def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractContextManager[None]:
     """Within the ``with`` block, call ``report(stage, done, total)`` after each program a batch solves.
 
-    ``stage`` names the batch (``"warm starts"``, ``"linked programs"``, ``"programs again"``),
+    ``stage`` names the batch (``"warm starts"``, ``"warm starts with free ends"``, ``"warm starts
+    pinned again"``, ``"linked programs"``, ``"programs again"``),
     ``done`` of its ``total`` programs are solved. The registration is per thread and per task (a
     context variable); an inner block replaces an outer one (:class:`skatetrace.progress.Channel`).
     """
