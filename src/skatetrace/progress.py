@@ -52,11 +52,6 @@ class Channel:
         finally:
             self._callback.reset(token)
 
-    @property
-    def listened(self) -> bool:
-        """Whether a callback is registered here (a stage may skip counting when not)."""
-        return self._callback.get() is not None
-
     def report(self, stage: str, done: int, total: int) -> None:
         """Tell the registered callback (if any) that ``done`` of ``total`` steps of ``stage`` are done."""
         callback = self._callback.get()

@@ -205,8 +205,7 @@ class _Fitter:
 
     def report(self, stage: str, piece: int) -> None:
         """Report the drawing's pieces before this path's ``piece`` done."""
-        if _PROGRESS.listened:
-            _PROGRESS.report(stage, self.where[0] + piece, self.where[1])
+        _PROGRESS.report(stage, self.where[0] + piece, self.where[1])
 
     def greedy(self, geom: _RunGeom) -> list[_Interval]:
         """Halve each spiral span at its arc-length midpoint until every biarc is within ``tol``."""
@@ -267,25 +266,21 @@ class _Fitter:
         if sum(whole) < max(least, 3):
             return intervals
         counts = np.concatenate([[0], np.cumsum([len(iv.segs) for iv in intervals])])
-        stretch = [0] * n  # the number of whole spans in a row that each whole one is part of
-        k = 0
-        while k < n:
-            end = k
-            while end < n and whole[end]:
-                end += 1
-            stretch[k:end] = [end - k] * (end - k)
-            k = max(end, k + 1)
+        # per whole span: where its stretch of whole spans in a row starts and ends (one past it)
+        starts, ends = [0] * n, [0] * n
+        for k in range(n):
+            starts[k] = starts[k - 1] if k and whole[k - 1] else k
+        for k in range(n - 1, -1, -1):
+            ends[k] = ends[k + 1] if k + 1 < n and whole[k + 1] else k + 1
         out: list[_Interval] = []
         i, reported = 0, -_REPORT_EVERY
         while i < n:
             if i - reported >= _REPORT_EVERY:
                 self.report("merging", geom.spans[intervals[i].a[0]].piece)
                 reported = i
-            last = i  # the last interval of the run of whole spans from i (at most MERGE_SPANS)
-            while whole[i] and last + 1 < n and whole[last + 1] and last + 1 - i < MERGE_SPANS:
-                last += 1
+            last = min(ends[i], i + MERGE_SPANS) - 1  # the last whole span a biarc from i may cover
             first = int(np.searchsorted(counts, counts[i] + 3, side="left")) - 1  # covers 3 segments
-            if not whole[i] or first > last or stretch[i] < least:
+            if not whole[i] or first > last or ends[i] - starts[i] < least:
                 out.append(intervals[i])
                 i += 1
                 continue

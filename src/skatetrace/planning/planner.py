@@ -189,7 +189,7 @@ def _presolved(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: 
     out: the three turn in exact mode spent 88 s on the programs of four sections beside its
     fifth, refused.
     """
-    todo = []  # (spec, start, end, reach, the curve's index) of every section of a curve that can be planned
+    todo = []  # (spec, options, start pin, end pin, the curve's index) of every section of a curve that can be planned
     for ci, (specs, popts) in enumerate(curves):
         if any(program_too_large([spec], popts) for spec in specs):
             continue  # the curve cannot be planned (:func:`_warm_start` stops at that section): nothing to solve
