@@ -617,7 +617,7 @@ def test_a_long_fit_shows_its_pieces_and_a_short_one_nothing(capsys, monkeypatch
 
     clock = iter([0.0, 0.3, 0.6, 0.9] + [10.0, 10.5, 11.0, 11.5, 12.0, 12.5])
     monkeypatch.setattr(status.time, "perf_counter", lambda: next(clock))
-    fit = status.LongFit(status.StatusLine())
+    fit = status.long_fit(status.StatusLine())
     for done in (0, 100, 200):
         fit("fitting", done, 300)
     fit("fitting", 300, 300)  # within a second: nothing
@@ -627,3 +627,19 @@ def test_a_long_fit_shows_its_pieces_and_a_short_one_nothing(capsys, monkeypatch
     shown = [line.split("\r")[-1] for line in capsys.readouterr().err.split("\n")]
     assert shown == ["fitting: 5000/20000 pieces of the drawing", "merging: 0/20000 pieces of the drawing",
                      "fitting: 20000/20000 pieces of the drawing", ""]
+
+
+def test_long_work_is_redrawn_at_most_ten_times_a_second_and_at_its_end(capsys, monkeypatch):
+    # a zigzag's 2,000 sections are replayed in a few seconds: not 2,000 redraws of the line
+    from skatetrace.cli import status
+
+    times = iter(0.01 * np.arange(401))  # 4 s of reports, one every 10 ms
+    monkeypatch.setattr(status.time, "perf_counter", lambda: next(times))
+    work = status.LongWork(status.StatusLine(), "verifying: {stage} {done}/{total} sections")
+    for done in range(400):
+        work("replaying", done, 400)
+    work("replaying", 400, 400)
+    drawn = [part for part in capsys.readouterr().err.replace("\n", "\r").split("\r") if part]
+    # the first after a second, then every 0.1 s (round-off may add or drop one), then the end
+    assert 28 <= len(drawn) <= 32, drawn
+    assert drawn[0] == "verifying: replaying 100/400 sections" and drawn[-1] == "verifying: replaying 400/400 sections"

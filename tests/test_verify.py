@@ -171,3 +171,36 @@ def test_a_replay_that_turns_nan_fails_its_section_instead_of_crashing_the_measu
     bad = [s for s in report.sections if not s["passed"]]
     assert bad and bad[0]["section"] == 1 and bad[0]["max_deviation_replay_to_figure"] == float("inf")
     assert report.sections[0]["passed"]
+
+
+def test_many_sections_are_sampled_side_by_side_as_one_by_one_and_the_verification_reports_its_stages(
+        monkeypatch, pools_made):
+    # Issue 19 item 7: a zigzag of 2,000 lines spent a silent minute sampling, replaying and
+    # measuring its sections after they were traced; the sampling now runs in rounds shared out
+    # between processes, and every stage reports how far it is
+    import skatetrace as st
+
+    pieces = [{"type": "line", "length": 1.0 + 0.05 * k} for k in range(20)]  # 20 distinct sections
+    joins = [{"type": "cusp", "pivot_deg": 40.0 * (-1) ** k} for k in range(19)]
+    figure = st.figure_from_dict({"curves": [{"pieces": pieces, "joins": joins}]})
+    trace = st.trace_figure(figure, figure.params)
+    assert len(trace.sections) == 20 and all(s.success for s in trace.sections)
+    monkeypatch.setattr(verify_module, "_FORK_SECTIONS", 10**9)
+    alone, alone_states = verify_module.schedule_from_trace(trace)
+    monkeypatch.setattr(verify_module, "_FORK_SECTIONS", 2)
+    monkeypatch.setattr(verify_module, "_SAMPLE_ROUND", 3)
+    seen = []
+    with verify_module.reporting(lambda *args: seen.append(args)):
+        shared, shared_states = verify_module.schedule_from_trace(trace)
+        report = verify_module.verify(trace, shared)
+    for k in ("t", "a", "b", "adot", "bdot", "section", "piece"):
+        np.testing.assert_array_equal(getattr(shared, k), getattr(alone, k))
+    for k in alone_states:
+        np.testing.assert_array_equal(shared_states[k], alone_states[k])
+    assert report.success
+    for stage in ("sampling the controls", "replaying", "measuring"):
+        done = [d for s, d, total in seen if s == stage]
+        assert done == sorted(done) and done[-1] == 20 and len(done) > 5, (stage, done)
+        assert {total for s, _, total in seen if s == stage} == {20}
+    assert [s for s, _, _ in seen] == sorted((s for s, _, _ in seen), key=["sampling the controls", "replaying",
+                                                                          "measuring"].index)

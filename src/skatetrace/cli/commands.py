@@ -24,7 +24,7 @@ from ..dynamics.presets import REACH_PER_HEIGHT
 from ..tracing.sections import TraceOptions
 from .robustness import add_parser as _add_robustness_parser
 from .robustness import run as _robustness
-from .status import LongFit, StatusLine, planning_progress
+from .status import LongWork, StatusLine, long_fit, planning_progress
 from .values import figure_length
 
 __all__ = ["build_parser", "main"]
@@ -201,7 +201,7 @@ def _resolve(args, name: str):
     from ..drawings.fitting import reporting
     from ..drawings.sources import resolve
 
-    with reporting(LongFit(StatusLine())):
+    with reporting(long_fit(StatusLine())):
         return resolve(name, size=args.size, tol=args.tol, method=args.method, height=args.height, blade=args.blade,
                        edge=args.edge, direction=args.direction, foot=args.foot, body_mass=args.body_mass,
                        exact=args.exact, paths=getattr(args, "paths", None))
@@ -354,8 +354,10 @@ def _unplanned_if_better(done, figure, params, options, args, limits, progress):
 
 
 def _trace(args) -> int:
+    from ..outputs.results import reporting as writing
     from ..outputs.results import write_results
     from ..pipeline import trace_and_verify
+    from ..verification.verify import reporting as verifying
 
     t0 = time.perf_counter()
     res = _resolve(args, args.figure)
@@ -381,7 +383,8 @@ def _trace(args) -> int:
         status.show("sections", f"tracing sections {done}/{total}", done == total)
 
     limits = _human_limits(args, res, params)
-    with planning_progress(options, status):
+    checking = LongWork(status, "verifying: {stage} {done}/{total} sections")
+    with planning_progress(options, status), verifying(checking):
         done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
                                 progress=progress)
     if args.reach is None and options.reach is not None and not all(s.success for s in done.trace.sections):
@@ -393,7 +396,8 @@ def _trace(args) -> int:
         print(f"note: rests added at smooth joins ({where}): sections failed to trace or their replay strayed "
               f"more than allowed; {done.rounds} trace-and-verify rounds")
     out = Path(args.out)
-    write_results(out, trace, schedule, states, report, unit=res.unit, feasibility=done.feasibility)
+    with writing(LongWork(status, "{stage}: {done}/{total} rows")):
+        write_results(out, trace, schedule, states, report, unit=res.unit, feasibility=done.feasibility)
     if res.fit is not None:
         _write_fit(res, out, not args.no_plots)
     if not args.no_plots:

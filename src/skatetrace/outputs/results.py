@@ -8,24 +8,26 @@ file is written atomically and as strict JSON (:mod:`skatetrace.outputs.files`).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from ..dynamics.controls import ControlSchedule
 from ..errors import SkatetraceError
-from ..processes import map_forked
+from ..processes import map_forked, worker_count
+from ..progress import Channel
 from ..tracing.sections import FigureTrace
 from ..verification.feasibility import Feasibility
 from ..verification.verify import VerificationReport
-from .files import atomic_write, dumps_json, json_safe
+from .files import atomic_write, dumps_json, json_safe, write_atomically
 
 __all__ = ["SCHEMA_VERSION", "CSV_COLUMNS", "CONTROLS_SCHEMA", "LEGACY_CSV_COLUMNS", "result_dict", "write_results",
-           "load_result", "read_controls", "read_result_folder"]
+           "reporting", "load_result", "read_controls", "read_result_folder"]
 
 SCHEMA_VERSION = "skatetrace.result/1"
 CSV_COLUMNS = ("piece", "t", "a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2", "curve",
@@ -53,8 +55,8 @@ def result_dict(trace: FigureTrace) -> dict[str, Any]:
         pieces = []
         starts = np.cumsum([0.0] + [p.segment.length for p in sec.section.pieces[:-1]])
         if sec.phases:
-            times = sec.time_at_length(starts)
-            times[0] = 0.0
+            # the first piece starts the section: no search for it (most sections are one piece)
+            times = np.concatenate([[0.0], sec.time_at_length(starts[1:])]) if starts.size > 1 else np.zeros(1)
             states = sec.evaluate(times)
         for i, p in enumerate(sec.section.pieces):
             entry: dict[str, Any] = {"index": p.index, "curvature": p.segment.coefficients[0],
@@ -86,17 +88,33 @@ def result_dict(trace: FigureTrace) -> dict[str, Any]:
     })
 
 
-#: Rows of ``controls.csv`` from which its text is formatted in two processes (a planned school
+#: Rows of ``controls.csv`` from which its text is formatted in several processes (a planned school
 #: figure has 400,000 rows: 2.8 s of ``repr`` in one).
 _SPLIT_ROWS = 50_000
+#: Rows one process formats at a time. The file is written as each round of chunks comes back, so
+#: that memory holds a round's text, not the file's (a zigzag of 2,000 lines has 3.9 million rows, a
+#: gigabyte of text).
+_CHUNK_ROWS = 100_000
+
+_PROGRESS = Channel("writing")
 
 
-def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray], curve_of_section) -> str:
-    """``controls.csv``: floats as their shortest round-trip ``repr``, one column at a time.
+def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractContextManager[None]:
+    """Within the ``with`` block, call ``report("writing controls.csv", done, total)`` as its rows are written.
+
+    Reported after each round of chunks (:data:`_CHUNK_ROWS` rows a process), per thread and task,
+    like :func:`skatetrace.planning.pool.reporting` (:class:`skatetrace.progress.Channel`).
+    """
+    return _PROGRESS.listening(report)
+
+
+def _write_csv(path: Path, schedule: ControlSchedule, states: dict[str, np.ndarray], curve_of_section) -> None:
+    """Write ``controls.csv`` to ``path``: floats as their shortest round-trip ``repr``, one column at a time.
 
     ``piece`` counts within a curve, so each row also names its ``curve`` (``curve_of_section``:
-    the curve of every section) and ``section`` (in skating order over the figure). Long files are
-    formatted in halves side by side (:func:`~skatetrace.processes.map_forked`): the same text.
+    the curve of every section) and ``section`` (in skating order over the figure). From
+    :data:`_SPLIT_ROWS` rows on, the text is formatted in chunks side by side
+    (:func:`~skatetrace.processes.map_forked`), a round of chunks at a time: the same text.
     """
     section = np.asarray(schedule.section, dtype=int)
     curve = np.asarray(curve_of_section, dtype=int)[section] if section.size else section
@@ -110,8 +128,15 @@ def _csv_text(schedule: ControlSchedule, states: dict[str, np.ndarray], curve_of
         text = [list(map(str if a.dtype.kind == "i" else repr, a[lo:hi].tolist())) for a in arrays]
         return "".join(line + "\n" for line in map(",".join, zip(*text)))
 
-    halves = [(0, n // 2), (n // 2, n)] if n >= _SPLIT_ROWS else [(0, n)]
-    return ",".join(CSV_COLUMNS) + "\n" + "".join(map_forked(rows, halves))
+    step = min(_CHUNK_ROWS, -(-n // 2)) if n >= _SPLIT_ROWS else max(n, 1)
+    chunks = [(lo, min(lo + step, n)) for lo in range(0, n, step)]
+    per_round = max(1, worker_count(len(chunks), None))
+    with open(path, "w", encoding="utf-8", newline="") as f:
+        f.write(",".join(CSV_COLUMNS) + "\n")
+        for k in range(0, len(chunks), per_round):
+            batch = chunks[k:k + per_round]
+            f.writelines(map_forked(rows, batch))
+            _PROGRESS.report("writing controls.csv", batch[-1][1], n)
 
 
 def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule,
@@ -128,7 +153,8 @@ def write_results(out: str | Path, trace: FigureTrace, schedule: ControlSchedule
     atomic_write(out / "result.json", dumps_json({**result_dict(trace), "unit": unit,
                                                   "controls_schema": CONTROLS_SCHEMA}))
     written.append(out / "result.json")
-    atomic_write(out / "controls.csv", _csv_text(schedule, states, [s.curve_index for s in trace.sections]))
+    curves = [s.curve_index for s in trace.sections]
+    write_atomically(out / "controls.csv", lambda tmp: _write_csv(tmp, schedule, states, curves))
     written.append(out / "controls.csv")
     if report is not None:
         data = {"schema": "skatetrace.report/1", **report.to_dict()}

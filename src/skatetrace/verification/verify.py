@@ -21,9 +21,10 @@ departs from the schedule. Tolerances are never loosened.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 from numba import njit
@@ -34,9 +35,11 @@ from ..dynamics.model import SleighParams, momenta, velocities
 from ..dynamics.replayer import replay_chunk
 from ..dynamics.simulate import simulate
 from ..figures.geometry import distance_to_segment, segment_points
+from ..processes import map_forked
+from ..progress import Channel
 from ..tracing.sections import FigureTrace
 
-__all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "verify"]
+__all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "reporting", "verify"]
 
 #: Bounds on the dense samples of the replay and of the figure, so that memory stays bounded for
 #: any figure size and speed (figures of ordinary size and duration stay far below them).
@@ -44,7 +47,25 @@ MAX_REPLAY_SAMPLES = 200_000
 MAX_FIGURE_SAMPLES = 100_000
 
 
+#: Distinct sections from which their controls are sampled side by side (:func:`schedule_from_trace`),
+#: a round of :data:`_SAMPLE_ROUND` at a time; fewer are sampled here (a fork costs milliseconds).
+_FORK_SECTIONS = 16
+_SAMPLE_ROUND = 128
+
 _SAMPLED = ("a", "b", "adot", "bdot", "p1", "p2", "s", "xi1", "xi2", "segment")
+
+_PROGRESS = Channel("verification")
+
+
+def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractContextManager[None]:
+    """Within the ``with`` block, call ``report(stage, done, total)`` as a trace is verified.
+
+    ``stage`` is ``"sampling the controls"`` (:func:`schedule_from_trace`; ``done`` of ``total``
+    distinct sections), ``"replaying"`` or ``"measuring"`` (:func:`verify`; sections). A figure of
+    2,000 sections takes tens of seconds. Per thread and task, like
+    :func:`skatetrace.planning.pool.reporting` (:class:`skatetrace.progress.Channel`).
+    """
+    return _PROGRESS.listening(report)
 
 
 def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -80,14 +101,21 @@ def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, 
                                               "x", "y", "theta", "p1", "p2", "xi1", "xi2")}
     # Sections traced once and reused by trace_figure (the same shape elsewhere in the figure)
     # share their phases, hence their controls: they are sampled once and only laid out anew.
+    # Many distinct sections are sampled side by side, a round at a time (the same samples).
+    distinct: dict[tuple[int, int], Any] = {}
+    for sec in trace.sections:
+        if sec.phases:
+            distinct.setdefault((id(sec.phases), sec.direction), sec)
+    keys, firsts = list(distinct), list(distinct.values())
+    step = _SAMPLE_ROUND if len(firsts) >= _FORK_SECTIONS else 1
     sampled: dict[tuple[int, int], tuple[np.ndarray, dict[str, np.ndarray]]] = {}
+    for k in range(0, len(firsts), step):
+        sampled.update(zip(keys[k:k + step], map_forked(_sample_section, firsts[k:k + step])))
+        _PROGRESS.report("sampling the controls", min(k + step, len(firsts)), len(firsts))
     for si, (sec, t_start) in enumerate(zip(trace.sections, trace.start_times)):
         if not sec.phases:
             continue
-        key = (id(sec.phases), sec.direction)
-        if key not in sampled:
-            sampled[key] = _sample_section(sec)
-        ts, v = sampled[key]
+        ts, v = sampled[(id(sec.phases), sec.direction)]
         x, y, theta = sec.layout(v["s"], v["segment"])
         v = dict(v, x=x, y=y, theta=theta)
         for k in ("a", "b", "adot", "bdot", "x", "y", "theta", "p1", "p2", "xi1", "xi2"):
@@ -153,6 +181,7 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
         t0, t1 = float(schedule.t[i0]), float(schedule.t[i1 - 1])
         a, b, ad, bd = schedule.a[i0], schedule.b[i0], schedule.adot[i0], schedule.bdot[i0]
         if si != prev_section:
+            _PROGRESS.report("replaying", si, len(trace.sections))
             first = sec.section.pieces[0]
             # Start from the figure's own layout at a curve's start or after a section that could
             # not be traced (its motion is missing); otherwise carry on from the replay itself.
@@ -182,6 +211,7 @@ def replay(trace: FigureTrace, schedule: ControlSchedule, *, rtol: float = 1e-13
         idx = np.clip(np.searchsorted(schedule.t[i0:i1], tt, side="right") - 1, 0, i1 - i0 - 1)
         pieces.append(schedule.piece[i0:i1][idx])
         y = y_end
+    _PROGRESS.report("replaying", len(trace.sections), len(trace.sections))
     if not ts:
         # No section was traced (every one failed): nothing to replay, which verify reports.
         return Replay(t=np.empty(0), state=np.empty((5, 0)), controls=np.empty((4, 0)),
@@ -380,6 +410,8 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
     for si, sec in enumerate(trace.sections):
         if only is not None and si not in only:
             continue
+        if only is None:
+            _PROGRESS.report("measuring", si, len(trace.sections))
         idx = order[cuts[si]:cuts[si + 1]]
         if not sec.phases or not idx.size:
             out[si] = ({"section": si, "traced": False, "passed": False, "message": sec.message}, [])
@@ -444,6 +476,8 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
             drifts.append({"piece": p.index, "invariant": name, "drift": float(np.ptp(inv)),
                            "scale": float(np.max(np.abs(inv)) + 1e-300)})
         out[si] = (record, drifts)
+    if only is None:
+        _PROGRESS.report("measuring", len(trace.sections), len(trace.sections))
     return out
 
 
