@@ -29,7 +29,10 @@ CORPUS = Path(__file__).resolve().parent.parent / "tests" / "data" / "svg-corpus
 
 def _trace(figure, reach, fallback: bool):
     limits = HumanLimits.for_skater(1.7, 60.0)
-    done = st.trace_and_verify(figure, figure.params, st.TraceOptions(speed=2.0, reach=reach), limits=limits)
+    # as the command line under its default reach: no search of larger reaches for the
+    # sections without a plan, which fall back to the launch-glide-stop manoeuvres anyway
+    options = st.TraceOptions(speed=2.0, reach=reach, reach_hint=not fallback)
+    done = st.trace_and_verify(figure, figure.params, options, limits=limits)
     if fallback and not all(s.success for s in done.trace.sections):
         again = st.trace_and_verify(figure, figure.params, st.TraceOptions(speed=2.0), limits=limits)
         if all(s.success for s in again.trace.sections):
