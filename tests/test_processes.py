@@ -71,3 +71,20 @@ def test_plots_drawn_in_children_are_written_and_recorded_here(forking, tmp_path
     assert [p.name for p in seen] == [p.name for p in written] == ["figure.png", "controls.png", "speed.png",
                                                                   "mass_path.png", "energies.png"]
     assert all(p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in written)
+
+
+def test_a_child_runs_its_own_side_by_side_work_itself():
+    # the verification samples its sections with map_forked, and may itself run in a child (a
+    # plot, a share of other work): a daemonic child may not fork, so it runs the work itself
+    # instead of failing and leaving its share to be run again here
+    if not processes.can_fork():
+        pytest.skip("this test process may not fork")
+    parent = os.getpid()
+
+    def outer(x):
+        return os.getpid(), processes.map_forked(lambda y: os.getpid(), [0, 1], workers=2)
+
+    (here, inner_here), (child, inner_child) = processes.map_forked(outer, [0, 1], workers=2)
+    assert here == parent and child != parent  # item 1 ran in the child, not again here
+    assert inner_child == [child, child]
+    assert inner_here[0] == parent and inner_here[1] not in (parent, child)

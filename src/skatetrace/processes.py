@@ -52,9 +52,11 @@ def worker_count(jobs: int, workers: int | None) -> int:
 
 
 def can_fork() -> bool:
-    """Whether this process may fork: the platform has ``fork`` and no other thread runs (a fork
-    copies only the calling thread, and would leave another's locks held in the child)."""
-    return "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+    """Whether this process may fork: the platform has ``fork``, no other thread runs (a fork
+    copies only the calling thread, and would leave another's locks held in the child), and this
+    is not itself a child of :func:`map_forked` (a daemonic process may not have children)."""
+    return ("fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+            and not multiprocessing.current_process().daemon)
 
 
 def quiet_on_interrupt() -> None:
