@@ -17,6 +17,7 @@ asks. Nothing is asserted about time.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
@@ -29,14 +30,18 @@ CORPUS = Path(__file__).resolve().parent.parent / "tests" / "data" / "svg-corpus
 
 def _trace(figure, reach, fallback: bool):
     limits = HumanLimits.for_skater(1.7, 60.0)
-    # as the command line under its default reach: no search of larger reaches for the
-    # sections without a plan, which fall back to the launch-glide-stop manoeuvres anyway
-    options = st.TraceOptions(speed=2.0, reach=reach, reach_hint=not fallback)
+    # as the command line under its default reach: no search of larger reaches for the sections
+    # without a plan, and no curve planned further once one has such a section (all or nothing),
+    # since the launch-glide-stop manoeuvres then trace the figure; where they do not either,
+    # the whole plan with its failures
+    options = st.TraceOptions(speed=2.0, reach=reach, reach_hint=not fallback, all_or_nothing=fallback)
     done = st.trace_and_verify(figure, figure.params, options, limits=limits)
     if fallback and not all(s.success for s in done.trace.sections):
         again = st.trace_and_verify(figure, figure.params, st.TraceOptions(speed=2.0), limits=limits)
         if all(s.success for s in again.trace.sections):
             return again, True
+        whole = dataclasses.replace(options, all_or_nothing=False)
+        return st.trace_and_verify(figure, figure.params, whole, limits=limits), False
     return done, False
 
 

@@ -515,6 +515,36 @@ def test_a_default_reach_that_cannot_plan_falls_back_to_the_unbounded_trace(tmp_
     assert "launch-glide-stop manoeuvres instead" not in capsys.readouterr().out
 
 
+def test_the_default_reach_plans_all_or_nothing_and_wholly_where_nothing_else_traces(tmp_path, capsys, monkeypatch):
+    # the default reach stops planning at a section without a plan (the launch-glide-stop
+    # manoeuvres trace the figure then); where they fail too, the whole plan is made and kept
+    import dataclasses
+
+    import skatetrace.pipeline as pipeline
+    from skatetrace.tracing.sections import TraceStatus, trace_figure
+
+    asked = []
+
+    def failing_first(trace):
+        bad = dataclasses.replace(trace.sections[0], success=False, status=TraceStatus.INFEASIBLE, message="no way")
+        return dataclasses.replace(trace, sections=(bad,) + trace.sections[1:])
+
+    def plan(figure, params, options, progress=None):
+        asked.append(options.all_or_nothing)
+        return failing_first(trace_figure(figure, params, dataclasses.replace(options, reach=None)))
+
+    monkeypatch.setattr(pipeline, "plan_figure", plan)
+    monkeypatch.setattr(pipeline, "trace_figure", lambda *a, **k: failing_first(trace_figure(*a, **k)))
+    out = tmp_path / "o"
+    assert main(["trace", "school:loop", "--out", str(out), "--no-plots", "--no-viewer", "--rests", "never"]) == 1
+    assert asked == [True, False]
+    assert json.loads((out / "result.json").read_text())["options"]["all_or_nothing"] is False  # the whole plan's
+    asked.clear()
+    assert main(["trace", "school:loop", "--reach", "auto", "--out", str(out), "--no-plots", "--no-viewer",
+                 "--rests", "never"]) == 1
+    assert asked == [False]  # asked for, the reach plans every curve as far as it goes
+
+
 def test_trace_reach_plans_within_it_and_reports_the_cusps(tmp_path, capsys):
     out = tmp_path / "o"
     assert main(["trace", str(_arc_file(tmp_path)), "--reach", "1", "--out", str(out), "--no-plots",

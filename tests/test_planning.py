@@ -589,3 +589,39 @@ def test_sections_without_a_pinned_plan_are_planned_again_side_by_side(monkeypat
     assert links == links_alone
     for a, b in zip(batched.states, alone.states):
         np.testing.assert_array_equal(a, b)
+
+
+def test_all_or_nothing_plans_no_curve_further_once_a_section_has_no_plan(monkeypatch):
+    # the command line's default reach uses a plan only if every section has one: a drawing of 22
+    # sections planned and finished its other curves for 40 s before falling back all the same.
+    # The warm start of curve 1 is made to find no plan (a real one takes 50 s to say so)
+    import copy
+
+    from skatetrace.planning import planner
+    from skatetrace.planning.pool import reporting
+
+    real = planner._warm_start
+
+    def none_for_the_arc(specs, popts, solved):
+        guess, bad, continues = real(specs, popts, solved)
+        return (None, 0, continues) if len(specs) == 1 else (guess, bad, continues)
+
+    monkeypatch.setattr(planner, "_warm_start", none_for_the_arc)
+    data = copy.deepcopy(CUSPS["pivot"])
+    data["curves"].append({"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 90}]})
+    fig = figure_from_dict(data)
+    for aon in (False, True):
+        stages = []
+        with reporting(lambda stage, done, total: stages.append(stage)):
+            trace = plan_figure(fig, options=st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=aon))
+        first, second, arc = trace.sections
+        assert arc.status is st.TraceStatus.INFEASIBLE
+        if not aon:
+            assert first.success and second.success and "linked programs" in stages
+        else:
+            assert "linked programs" not in stages and "programs again" not in stages
+            for sec in (first, second):
+                assert sec.status is st.TraceStatus.NOT_PLANNED and not sec.phases
+                assert "section 0 of curve 1 has no motion within the reach (all or nothing)" in sec.message
+    with pytest.raises(ValueError, match="all_or_nothing must be True or False"):
+        st.TraceOptions(reach=1.0, all_or_nothing=1)

@@ -21,7 +21,7 @@ from ..figures.patterns import pattern, pattern_names
 from ..drawings.sources import DRAWING_SUFFIXES
 from ..pipeline import REST_POLICIES
 from ..dynamics.presets import REACH_PER_HEIGHT
-from ..tracing.sections import TraceOptions
+from ..tracing.sections import TraceOptions, TraceStatus
 from .robustness import add_parser as _add_robustness_parser
 from .robustness import run as _robustness
 from .status import LongWork, StatusLine, long_fit, planning_progress
@@ -341,12 +341,18 @@ def _unplanned_if_better(done, figure, params, options, args, limits, progress):
     """
     from ..pipeline import trace_and_verify
 
-    failed = next(s for s in done.trace.sections if not s.success)
-    unbounded = dataclasses.replace(options, reach=None)
+    bad = [s for s in done.trace.sections if not s.success]
+    failed = next((s for s in bad if s.status is not TraceStatus.NOT_PLANNED), bad[0])  # a reason, not "skipped"
+    unbounded = dataclasses.replace(options, reach=None, all_or_nothing=False)
     again = trace_and_verify(figure, params, unbounded, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
                              progress=progress)
     if not all(s.success for s in again.trace.sections):
-        return done, options
+        if not options.all_or_nothing:
+            return done, options
+        # neither traces every section: the whole plan, every curve planned as far as it goes
+        whole = dataclasses.replace(options, all_or_nothing=False)
+        return trace_and_verify(figure, params, whole, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
+                                progress=progress), whole
     print(f"note: not every section could be planned within the default reach {options.reach:.4g} m "
           f"({failed.message}); traced with the launch-glide-stop manoeuvres instead (as --reach none). "
           f"Give --reach to see the plan and its failures")
@@ -369,7 +375,8 @@ def _trace(args) -> int:
     # the default reach (not asked for) falls back to the launch-glide-stop manoeuvres where a
     # section has no plan: searching larger reaches for it would only delay that
     options = TraceOptions(speed=speed, reach=_reach(args, res.unit), objective=args.objective,
-                           max_accel=args.max_accel, workers=args.workers, reach_hint=args.reach is not None)
+                           max_accel=args.max_accel, workers=args.workers, reach_hint=args.reach is not None,
+                           all_or_nothing=args.reach is None)
     if options.reach is not None:
         print(f"note: planning the mass's motion within {options.reach:.4g} {res.unit if res.unit == 'm' else 'model units'} "
               f"of the blade for least {options.objective} (--reach none: the launch-glide-stop manoeuvres)")

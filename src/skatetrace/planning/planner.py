@@ -427,7 +427,8 @@ def _linked_job(specs, popts: ProgramOptions, guess: ProgramSolution, meshes):
     return job, whole
 
 
-def _plan_curves(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: int | None
+def _plan_curves(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers: int | None,
+                 all_or_nothing: bool = False
                  ) -> list[tuple[ProgramSolution | None, int | None, tuple[str, ...], bool, ProgramSolution | None]]:
     """Each curve as one program from its warm start (:func:`_warm_start`), else the warm start itself.
 
@@ -439,12 +440,14 @@ def _plan_curves(curves: list[tuple[list[SectionSpec], ProgramOptions]], workers
     sections were planned pinned at the cusp (``"impulse"``), and jumps where one could not be
     (``"jump"``: reported, never hidden). The distinct warm-start programs of all curves, then
     the curves' linked programs, are solved side by side in ``workers`` processes
-    (:mod:`skatetrace.planning.pool`).
+    (:mod:`skatetrace.planning.pool`). With ``all_or_nothing``, no linked program is solved once
+    a curve has a section without a plan of its own (:attr:`TraceOptions.all_or_nothing`).
     """
     solved = _presolved(curves, workers)
     warm = [_warm_start(specs, popts, solved) for specs, popts in curves]
+    unplanned = all_or_nothing and any(guess is None for guess, _bad, _c in warm)
     linking = [i for i, ((specs, _popts), (guess, _bad, _c)) in enumerate(zip(curves, warm))
-               if guess is not None and len(specs) > 1]
+               if guess is not None and len(specs) > 1 and not unplanned]
     jobs = [_linked_job(curves[i][0], _linked_options(curves[i][1]), warm[i][0], warm[i][0].meshes) for i in linking]
     # Curves drawn alike (the same sections, pins and guess: a row of identical strokes) are the
     # same program: each distinct one is solved once (15 identical strokes took 15 solves).
@@ -552,10 +555,16 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     for curve in figure.curves:
         specs, sections = curve_specs(curve)
         curves.append((specs, sections, dataclasses.replace(popts, closing_turn=_closing_turn(curve, sections))))
-    plans = _plan_curves([(specs, curve_opts) for specs, _sections, curve_opts in curves], options.workers)
+    plans = _plan_curves([(specs, curve_opts) for specs, _sections, curve_opts in curves], options.workers,
+                         options.all_or_nothing)
+    # all or nothing: where a curve has a section without a plan, no curve is finished
+    stop = next((f"reach {options.reach:.4g}: not planned: section {bad} of curve {ci} has no motion within the reach "
+                 "(all or nothing)" for ci, (plan, bad, *_rest) in enumerate(plans) if plan is None), None)
     for ci, ((specs, sections, curve_opts), (plan, bad, links, linked, candidate)) in enumerate(zip(curves, plans)):
         try:
-            if plan is None:
+            if stop is not None and options.all_or_nothing and plan is not None:
+                curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
+            elif plan is None:
                 curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
             else:
                 curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params,

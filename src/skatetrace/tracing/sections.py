@@ -109,6 +109,12 @@ class TraceOptions:
         metrics). Each is one more program: a long section's can take a minute (a spiral of 60
         arcs, 65 s). False says only that the reach is too small (the command line's default
         reach, which falls back to the launch-glide-stop manoeuvres, does so).
+    all_or_nothing : bool
+        With a reach: where the sections' own programs leave one without a plan, plan no curve
+        further (no linked program is solved, no curve finished): the others are reported
+        ``NOT_PLANNED``, naming that section. For a caller that uses a plan only if every section
+        has one (the command line's default reach falls back to the launch-glide-stop
+        manoeuvres): a drawing of 22 sections spent 40 s planning curves it then set aside.
     workers : int or None
         Processes in which independent work runs side by side: the planner's programs (the
         distinct sections' warm starts, the curves' linked programs) and the tracer's distinct
@@ -132,6 +138,7 @@ class TraceOptions:
     max_accel: float | None = None
     max_mass_speed: float | None = None
     reach_hint: bool = True
+    all_or_nothing: bool = False
     workers: int | None = None
 
     def __post_init__(self) -> None:
@@ -164,8 +171,9 @@ class TraceOptions:
             if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))
                                       or not (math.isfinite(value) and value > 0)):
                 raise ValueError(f"{name} must be a positive finite number or None, got {value!r}")
-        if not isinstance(self.reach_hint, (bool, np.bool_)):
-            raise ValueError(f"reach_hint must be True or False, got {self.reach_hint!r}")
+        for name in ("reach_hint", "all_or_nothing"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
         if self.objective not in ("effort", "time"):
             raise ValueError(f"objective must be 'effort' or 'time', got {self.objective!r}")
         if self.objective == "time" and self.reach is not None and self.max_accel is None:
