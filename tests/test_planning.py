@@ -593,7 +593,7 @@ def test_sections_without_a_pinned_plan_are_planned_again_side_by_side(monkeypat
 
 def test_all_or_nothing_plans_no_curve_further_once_a_section_has_no_plan(monkeypatch):
     # the command line's default reach uses a plan only if every section has one: a drawing of 22
-    # sections planned and finished its other curves for 40 s before falling back all the same.
+    # sections planned and finished its other curves for 30 s before falling back all the same.
     # The warm start of curve 1 is made to find no plan (a real one takes 50 s to say so)
     import copy
 

@@ -114,7 +114,7 @@ class TraceOptions:
         further (no linked program is solved, no curve finished): the others are reported
         ``NOT_PLANNED``, naming that section. For a caller that uses a plan only if every section
         has one (the command line's default reach falls back to the launch-glide-stop
-        manoeuvres): a drawing of 22 sections spent 40 s planning curves it then set aside.
+        manoeuvres): a drawing of 22 sections spent 30 of its 60 s planning curves it then set aside.
     workers : int or None
         Processes in which independent work runs side by side: the planner's programs (the
         distinct sections' warm starts, the curves' linked programs) and the tracer's distinct
