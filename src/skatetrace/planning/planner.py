@@ -559,10 +559,11 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
                          options.all_or_nothing)
     # all or nothing: where a curve has a section without a plan, no curve is finished
     stop = next((f"reach {options.reach:.4g}: not planned: section {bad} of curve {ci} has no motion within the reach "
-                 "(all or nothing)" for ci, (plan, bad, *_rest) in enumerate(plans) if plan is None), None)
+                 "(all or nothing)" for ci, (plan, bad, *_rest) in enumerate(plans) if plan is None),
+                None) if options.all_or_nothing else None
     for ci, ((specs, sections, curve_opts), (plan, bad, links, linked, candidate)) in enumerate(zip(curves, plans)):
         try:
-            if stop is not None and options.all_or_nothing and plan is not None:
+            if stop is not None and plan is not None:
                 curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
             elif plan is None:
                 curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
