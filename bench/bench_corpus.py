@@ -17,7 +17,6 @@ asks. Nothing is asserted about time.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import time
 from pathlib import Path
 
@@ -30,19 +29,12 @@ CORPUS = Path(__file__).resolve().parent.parent / "tests" / "data" / "svg-corpus
 
 def _trace(figure, reach, fallback: bool):
     limits = HumanLimits.for_skater(1.7, 60.0)
-    # as the command line under its default reach: no search of larger reaches for the sections
-    # without a plan, and no curve planned further once one has such a section (all or nothing),
-    # since the launch-glide-stop manoeuvres then trace the figure; where they do not either,
-    # the whole plan with its failures
-    options = st.TraceOptions(speed=2.0, reach=reach, reach_hint=not fallback, all_or_nothing=fallback)
-    done = st.trace_and_verify(figure, figure.params, options, limits=limits)
-    if fallback and not all(s.success for s in done.trace.sections):
-        again = st.trace_and_verify(figure, figure.params, st.TraceOptions(speed=2.0), limits=limits)
-        if all(s.success for s in again.trace.sections):
-            return again, True
-        whole = dataclasses.replace(options, all_or_nothing=False)
-        return st.trace_and_verify(figure, figure.params, whole, limits=limits), False
-    return done, False
+    if fallback:  # as the command line under its default reach (trace_within_default_reach)
+        options = st.TraceOptions(speed=2.0, reach=reach, reach_hint=False, all_or_nothing=True)
+        kept = st.trace_within_default_reach(figure, figure.params, options, limits=limits)
+        return kept.result, kept.fell_back
+    options = st.TraceOptions(speed=2.0, reach=reach)
+    return st.trace_and_verify(figure, figure.params, options, limits=limits), ""
 
 
 def measure(name: str, reach: float | str | None) -> dict:
@@ -59,7 +51,8 @@ def measure(name: str, reach: float | str | None) -> dict:
     done, fell_back = _trace(res.figure, skater_reach(1.7) if reach == "auto" else reach, reach == "auto")
     failed = next((s.message for s in done.trace.sections if not s.success), done.message)
     return {"file": name, "outcome": "verified" if done.success else "not verified",
-            "reason": ("launch-glide-stop (not every section planned)" if fell_back else "")
+            "reason": ({"unplanned": "launch-glide-stop (not every section planned)",
+                        "unverified": "launch-glide-stop (the plan's replay failed the verification)"}.get(fell_back, ""))
             + ("" if done.success else failed), "fit_s": t1 - t0, "trace_s": time.perf_counter() - t1,
             "sections": len(done.trace.sections), "verdict": done.verdict}
 

@@ -40,3 +40,42 @@ def pools_made(monkeypatch):
     monkeypatch.setattr(processes, "ProcessPoolExecutor", spy)
     monkeypatch.setattr(processes, "can_fork", lambda: True)
     return made
+
+
+@pytest.fixture
+def mocked_plans(monkeypatch):
+    """Plans and their verdicts mocked in :mod:`skatetrace.pipeline`: call it with ``plan_verifies``
+    (and ``unbounded_verifies``, default True). A "plan" is then the launch-glide-stop trace with
+    ``options.reach`` kept, so that the mocked verification tells the two apart and fails the one
+    it is told to; the call returns the options of every trace made from then on."""
+    import dataclasses
+
+    import skatetrace.pipeline as pipeline
+    from skatetrace.tracing.sections import trace_figure
+    from skatetrace.verification.verify import verify as real_verify
+
+    def mock(*, plan_verifies: bool, unbounded_verifies: bool = True) -> list:
+        made = []
+
+        def plan(figure, params, options, progress=None):
+            made.append(options)
+            return dataclasses.replace(trace_figure(figure, params, dataclasses.replace(options, reach=None)),
+                                       options=options)
+
+        def verify(trace, schedule, rel_tol):
+            report = real_verify(trace, schedule, rel_tol=rel_tol)
+            if (plan_verifies if trace.options.reach is not None else unbounded_verifies):
+                return report
+            return dataclasses.replace(report, success=False, status="failed",
+                                       message="deviation 8e-06 exceeds 6e-06")
+
+        def trace(figure, params, options, progress=None, cache=None):
+            made.append(options)
+            return trace_figure(figure, params, options, progress=progress, cache=cache)
+
+        monkeypatch.setattr(pipeline, "plan_figure", plan)
+        monkeypatch.setattr(pipeline, "verify", verify)
+        monkeypatch.setattr(pipeline, "trace_figure", trace)
+        return made
+
+    return mock

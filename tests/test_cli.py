@@ -515,6 +515,22 @@ def test_a_default_reach_that_cannot_plan_falls_back_to_the_unbounded_trace(tmp_
     assert "launch-glide-stop manoeuvres instead" not in capsys.readouterr().out
 
 
+def test_a_default_reach_whose_plan_fails_its_replay_falls_back_to_the_unbounded_trace(tmp_path, capsys, mocked_plans):
+    # w3c-styling-css-01-b: every section planned, the replay 8.25e-6 from the figure at 6e-6
+    made = mocked_plans(plan_verifies=False)
+    out = tmp_path / "o"
+    assert main(["trace", "school:loop", "--out", str(out), "--no-plots", "--no-viewer", "--rests", "never"]) == 0
+    printed = capsys.readouterr().out
+    assert ("the plan's replay failed the verification within the default reach 0.4896 m (deviation 8e-06 exceeds "
+            "6e-06); traced with the launch-glide-stop manoeuvres instead") in printed
+    assert [o.reach is None for o in made] == [False, True]
+    assert json.loads((out / "result.json").read_text())["options"]["reach"] is None
+    # asked for, the plan is kept with its failure
+    assert main(["trace", "school:loop", "--reach", "auto", "--out", str(out), "--no-plots", "--no-viewer",
+                 "--rests", "never"]) == 1
+    assert "launch-glide-stop manoeuvres instead" not in capsys.readouterr().out
+
+
 def test_the_default_reach_plans_all_or_nothing_and_wholly_where_nothing_else_traces(tmp_path, capsys, monkeypatch):
     # the default reach stops planning at a section without a plan (the launch-glide-stop
     # manoeuvres trace the figure then); where they fail too, the whole plan is made and kept

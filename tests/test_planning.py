@@ -625,3 +625,27 @@ def test_all_or_nothing_plans_no_curve_further_once_a_section_has_no_plan(monkey
                 assert "section 0 of curve 1 has no motion within the reach (all or nothing)" in sec.message
     with pytest.raises(ValueError, match="all_or_nothing must be True or False"):
         st.TraceOptions(reach=1.0, all_or_nothing=1)
+
+
+
+def test_the_default_reach_gives_up_a_plan_whose_replay_fails_for_the_launch_glide_stop_trace(mocked_plans):
+    # a plan is exact to its finish's residuals (1e-10 at the shooting joins): on a 6 m line with the
+    # mass behind the blade the open loop grew them to 8e-6 at a tolerance of 6e-6 (w3c-styling-css-01-b)
+    fig = figure_from_dict(CUSPS["pivot"])
+    options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True)
+    made = mocked_plans(plan_verifies=False)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never")
+    assert kept.fell_back == "unverified" and "deviation 8e-06 exceeds 6e-06" in kept.reason
+    assert kept.result.success and kept.options.reach is None and kept.result.trace.options.reach is None
+    assert [o.reach for o in made] == [1.0, None]
+    # where the launch-glide-stop trace fails too, the plan and its failure are kept
+    made = mocked_plans(plan_verifies=False, unbounded_verifies=False)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never")
+    assert (kept.fell_back, kept.reason) == ("", "") and kept.options is options
+    assert not kept.result.success and kept.result.trace.options.reach == 1.0
+    # a plan that verifies is kept without tracing anything else
+    made = mocked_plans(plan_verifies=True)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never")
+    assert kept.result.success and kept.fell_back == "" and [o.reach for o in made] == [1.0]
+    with pytest.raises(ValueError, match="needs options.reach"):
+        st.trace_within_default_reach(fig, None, st.TraceOptions(), rests="never")

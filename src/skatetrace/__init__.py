@@ -32,7 +32,7 @@ _EXPORTS = {
     "dynamics.model": ("SleighParams",),
     "figures.patterns": ("pattern", "pattern_names"),
     "dynamics.presets": ("PAPER_PARAMS", "skater_params"),
-    "pipeline": ("VerifiedTrace", "add_rests", "trace_and_verify"),
+    "pipeline": ("DefaultReachTrace", "VerifiedTrace", "add_rests", "trace_and_verify", "trace_within_default_reach"),
     "planning.planner": ("plan_figure",),
     "figures.school": ("school_figure", "school_names"),
     "drawings.sources": ("Resolved", "resolve"),

@@ -32,12 +32,12 @@ from .dynamics.controls import ControlSchedule
 from .dynamics.model import SleighParams
 from .figures.figure import Figure, Section
 from .planning.planner import plan_figure
-from .tracing.sections import FigureTrace, TraceOptions, trace_figure
+from .tracing.sections import FigureTrace, TraceOptions, TraceStatus, trace_figure
 from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
 
-__all__ = ["REST_POLICIES", "ReachPoint", "ReachSweep", "VerifiedTrace", "add_rests", "middle_join", "sweep_reach",
-           "trace_and_verify"]
+__all__ = ["REST_POLICIES", "DefaultReachTrace", "ReachPoint", "ReachSweep", "VerifiedTrace", "add_rests",
+           "middle_join", "sweep_reach", "trace_and_verify", "trace_within_default_reach"]
 
 REST_POLICIES = ("auto", "never", "joins")
 
@@ -200,6 +200,74 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
             return _finish(result, limits)
         added += new
         current = add_rests(figure, added)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DefaultReachTrace:
+    """What :func:`trace_within_default_reach` made: the result kept and the options it was made with.
+
+    ``fell_back`` says why the plan was given up for the launch-glide-stop trace: ``"unplanned"``
+    (a section has no plan) or ``"unverified"`` (the plan's replay failed the verification), with
+    the plan's ``reason``; empty where the plan (or, failing everything, the whole plan) is kept.
+    """
+
+    result: VerifiedTrace
+    options: TraceOptions
+    fell_back: str = ""
+    reason: str = ""
+
+
+def trace_within_default_reach(figure: Figure, params: SleighParams | None, options: TraceOptions, *,
+                               rests: str = "auto", rel_tol: float = 1e-6, limits: HumanLimits | None = None,
+                               progress=None) -> DefaultReachTrace:
+    """A reach the user did not ask for: the plan within ``options.reach`` where it traces and verifies
+    the figure, else the launch-glide-stop manoeuvres (``reach=None``) where they do.
+
+    This is what ``skatetrace trace`` does for a figure in metres without ``--reach``: the user asked
+    for a trace, not a plan. Planned all or nothing (``options.all_or_nothing``): once a section has
+    no plan, no curve is planned further. Given up when
+
+    - a section has no plan, and the launch-glide-stop manoeuvres trace every section; where they do
+      not either, the whole plan (every curve planned as far as it goes, ``all_or_nothing=False``)
+      is made and kept with its failures;
+    - the plan traces every section but its replay fails the verification, and the launch-glide-stop
+      trace passes it. A plan is exact to the finish's residuals (1e-10 at the shooting segments'
+      joins); where a section moves the mass behind the blade for long, the open loop amplifies
+      them beyond the tolerance (measured: a 6 m line, 1e-10 grown to 1e-6 rad of heading).
+
+    Parameters
+    ----------
+    options : TraceOptions
+        With ``reach`` set; the rest as for :func:`trace_and_verify`.
+
+    Returns
+    -------
+    DefaultReachTrace
+        ``fell_back`` and ``reason`` say why the launch-glide-stop trace was kept, if it was.
+    """
+    if options.reach is None:
+        raise ValueError("trace_within_default_reach needs options.reach (a reach to plan within), got None")
+    done = trace_and_verify(figure, params, options, rests=rests, rel_tol=rel_tol, limits=limits, progress=progress)
+    if done.success:
+        return DefaultReachTrace(result=done, options=options)
+    bad = [s for s in done.trace.sections if not s.success]
+    # a reason, not "skipped" (all or nothing)
+    failed = next((s for s in bad if s.status is not TraceStatus.NOT_PLANNED), bad[0]).message if bad else None
+    unbounded = replace(options, reach=None, all_or_nothing=False)
+    again = trace_and_verify(figure, params, unbounded, rests=rests, rel_tol=rel_tol, limits=limits,
+                             progress=progress)
+    if failed is None:  # every section planned, the replay failed
+        if again.success:
+            return DefaultReachTrace(result=again, options=unbounded, fell_back="unverified",
+                                     reason=done.report.message)
+        return DefaultReachTrace(result=done, options=options)
+    if all(s.success for s in again.trace.sections):
+        return DefaultReachTrace(result=again, options=unbounded, fell_back="unplanned", reason=failed)
+    if not options.all_or_nothing:
+        return DefaultReachTrace(result=done, options=options)
+    whole = replace(options, all_or_nothing=False)
+    return DefaultReachTrace(result=trace_and_verify(figure, params, whole, rests=rests, rel_tol=rel_tol,
+                                                     limits=limits, progress=progress), options=whole)
 
 
 _PEAKS = ("max_abs_a", "max_abs_b", "peak_abs_adot", "peak_abs_bdot", "peak_mass_kinetic_energy")

@@ -8,7 +8,6 @@ unreadable or malformed figure file).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import sys
 import time
@@ -21,7 +20,7 @@ from ..figures.patterns import pattern, pattern_names
 from ..drawings.sources import DRAWING_SUFFIXES
 from ..pipeline import REST_POLICIES
 from ..dynamics.presets import REACH_PER_HEIGHT
-from ..tracing.sections import TraceOptions, TraceStatus
+from ..tracing.sections import TraceOptions
 from .robustness import add_parser as _add_robustness_parser
 from .robustness import run as _robustness
 from .status import LongWork, StatusLine, long_fit, planning_progress
@@ -333,36 +332,10 @@ def _compiling():
         yield
 
 
-def _unplanned_if_better(done, figure, params, options, args, limits, progress):
-    """Where the default reach (not asked for) left sections unplanned, the launch-glide-stop
-    manoeuvres instead if they trace every section: the user asked for a trace, not a plan.
-
-    Says so, with the planner's first failure; keeps the plan (and its failures) otherwise.
-    """
-    from ..pipeline import trace_and_verify
-
-    bad = [s for s in done.trace.sections if not s.success]
-    failed = next((s for s in bad if s.status is not TraceStatus.NOT_PLANNED), bad[0])  # a reason, not "skipped"
-    unbounded = dataclasses.replace(options, reach=None, all_or_nothing=False)
-    again = trace_and_verify(figure, params, unbounded, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
-                             progress=progress)
-    if not all(s.success for s in again.trace.sections):
-        if not options.all_or_nothing:
-            return done, options
-        # neither traces every section: the whole plan, every curve planned as far as it goes
-        whole = dataclasses.replace(options, all_or_nothing=False)
-        return trace_and_verify(figure, params, whole, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
-                                progress=progress), whole
-    print(f"note: not every section could be planned within the default reach {options.reach:.4g} m "
-          f"({failed.message}); traced with the launch-glide-stop manoeuvres instead (as --reach none). "
-          f"Give --reach to see the plan and its failures")
-    return again, unbounded
-
-
 def _trace(args) -> int:
     from ..outputs.results import reporting as writing
     from ..outputs.results import write_results
-    from ..pipeline import trace_and_verify
+    from ..pipeline import trace_and_verify, trace_within_default_reach
     from ..verification.verify import reporting as verifying
 
     t0 = time.perf_counter()
@@ -392,10 +365,21 @@ def _trace(args) -> int:
     limits = _human_limits(args, res, params)
     checking = LongWork(status, "verifying: {stage} {done}/{total} sections")
     with planning_progress(options, status), verifying(checking):
-        done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol, limits=limits,
-                                progress=progress)
-    if args.reach is None and options.reach is not None and not all(s.success for s in done.trace.sections):
-        done, options = _unplanned_if_better(done, figure, params, options, args, limits, progress)
+        if args.reach is None and options.reach is not None:
+            # not asked for: the plan if it traces and verifies, else the launch-glide-stop manoeuvres
+            # if they do (the user asked for a trace, not a plan), else the whole plan with its failures
+            kept = trace_within_default_reach(figure, params, options, rests=args.rests, rel_tol=args.verify_tol,
+                                              limits=limits, progress=progress)
+            if kept.fell_back:
+                what = ("not every section could be planned within" if kept.fell_back == "unplanned"
+                        else "the plan's replay failed the verification within")
+                print(f"note: {what} the default reach {options.reach:.4g} m ({kept.reason}); traced with the "
+                      f"launch-glide-stop manoeuvres instead (as --reach none). Give --reach to see the plan and "
+                      f"its failures")
+            done, options = kept.result, kept.options
+        else:
+            done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol,
+                                    limits=limits, progress=progress)
     figure, trace, schedule, states, report = done.figure, done.trace, done.schedule, done.states, done.report
     if done.rests:
         where = ", ".join(f"before piece {pi}" + (f" of curve {ci}" if len(figure.curves) > 1 else "")
