@@ -51,7 +51,8 @@ def measure(name: str, reach: float | str | None) -> dict:
     done, fell_back = _trace(res.figure, skater_reach(1.7) if reach == "auto" else reach, reach == "auto")
     failed = next((s.message for s in done.trace.sections if not s.success), done.message)
     return {"file": name, "outcome": "verified" if done.success else "not verified",
-            "reason": ({"unplanned": "launch-glide-stop (not every section planned)",
+            "reason": ({"too large": "launch-glide-stop (too large to plan by default)",
+                        "unplanned": "launch-glide-stop (not every section planned)",
                         "unverified": "launch-glide-stop (the plan's replay failed the verification)"}.get(fell_back, ""))
             + ("" if done.success else failed), "fit_s": t1 - t0, "trace_s": time.perf_counter() - t1,
             "sections": len(done.trace.sections), "verdict": done.verdict}

@@ -531,6 +531,20 @@ def test_a_default_reach_whose_plan_fails_its_replay_falls_back_to_the_unbounded
     assert "launch-glide-stop manoeuvres instead" not in capsys.readouterr().out
 
 
+def test_a_drawing_too_large_to_plan_by_default_is_traced_with_the_launch_glide_stop_manoeuvres(tmp_path, capsys):
+    # issue 17: 16 circles and lines, programs of 14,512 unknowns, planned in 3.5 s but drawings of
+    # this size took up to minutes (vivus-hi-there: 80,779, 145 s); traced as they are, 0.2 s
+    drawing = str(Path(__file__).parent / "data" / "svg-corpus" / "svgpathtools-zero-radius-arcs.svg")
+    out = tmp_path / "o"
+    assert main(["trace", drawing, "--size", "6m", "--tol", "1mm", "--out", str(out), "--no-plots",
+                 "--no-viewer"]) == 0
+    printed = capsys.readouterr().out
+    assert ("this figure is not planned within the default reach 0.4896 m (its programs would have 14,512 unknowns, "
+            "more than the 12,000 the default reach plans); traced with the launch-glide-stop") in printed
+    assert "Give --reach auto to plan it" in printed
+    assert json.loads((out / "result.json").read_text())["options"]["reach"] is None
+
+
 def test_the_default_reach_plans_all_or_nothing_and_wholly_where_nothing_else_traces(tmp_path, capsys, monkeypatch):
     # the default reach stops planning at a section without a plan (the launch-glide-stop
     # manoeuvres trace the figure then); where they fail too, the whole plan is made and kept

@@ -3,12 +3,15 @@
 import dataclasses
 import math
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import skatetrace as st
 from skatetrace.dynamics.integrator import _rhs
 from skatetrace.figures.figure import figure_from_dict
+from skatetrace.planning.planner import figure_unknowns as planner_figure_unknowns
 from skatetrace.planning.planner import plan_figure
 from skatetrace.planning.symbolic import sleigh_functions
 
@@ -649,3 +652,54 @@ def test_the_default_reach_gives_up_a_plan_whose_replay_fails_for_the_launch_gli
     assert kept.result.success and kept.fell_back == "" and [o.reach for o in made] == [1.0]
     with pytest.raises(ValueError, match="needs options.reach"):
         st.trace_within_default_reach(fig, None, st.TraceOptions(), rests="never")
+
+
+def test_the_default_reach_traces_a_figure_too_large_to_plan_with_the_launch_glide_stop_manoeuvres(mocked_plans,
+                                                                                                    monkeypatch):
+    fig = figure_from_dict(CUSPS["pivot"])
+    options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True)
+    size = planner_figure_unknowns(fig, None, options)
+    made = mocked_plans(plan_verifies=True)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never", max_unknowns=size - 1)
+    assert kept.fell_back == "too large" and kept.unknowns == size and [o.reach for o in made] == [None]
+    assert f"its programs would have {size:,} unknowns, more than the {size - 1:,} the default reach plans" \
+        == kept.reason
+    assert kept.result.success and kept.options.reach is None
+    made = mocked_plans(plan_verifies=True)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never", max_unknowns=size)
+    assert kept.fell_back == "" and [o.reach for o in made] == [1.0]  # at the bound: planned
+    # the launch-glide-stop trace is kept whatever its outcome: no plan of minutes is made
+    import skatetrace.pipeline as pipeline
+    from skatetrace.tracing.sections import trace_figure
+
+    made = mocked_plans(plan_verifies=True)
+
+    def failing(figure, params, options, progress=None, cache=None):
+        made.append(options)
+        tr = trace_figure(figure, params, options, progress=progress, cache=cache)
+        bad = dataclasses.replace(tr.sections[0], success=False, status=st.TraceStatus.INFEASIBLE, message="no")
+        return dataclasses.replace(tr, sections=(bad,) + tr.sections[1:])
+
+    monkeypatch.setattr(pipeline, "trace_figure", failing)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never", max_unknowns=0)
+    assert kept.fell_back == "too large" and not kept.result.success and [o.reach for o in made] == [None]
+    for bad in (-1, 1.5, True, "12000"):
+        with pytest.raises(ValueError, match="max_unknowns must be a whole number"):
+            st.trace_within_default_reach(fig, None, options, max_unknowns=bad)
+
+
+DATA = Path(__file__).parent / "data"
+
+
+def test_every_school_figure_is_small_enough_for_the_default_reach_to_plan():
+    # issue 15: a skater's figure is planned by default; the bound is what keeps drawings of
+    # thousands of unknowns (minutes of IPOPT) to the launch-glide-stop manoeuvres
+    from skatetrace.pipeline import DEFAULT_PLAN_UNKNOWNS
+
+    options = st.TraceOptions(speed=2.0, reach=0.288 * 1.7)
+    sizes = {name: planner_figure_unknowns(st.school_figure(name, height=1.7), st.skater_params(height=1.7), options)
+             for name in st.school_names()}
+    assert max(sizes.values()) <= DEFAULT_PLAN_UNKNOWNS, sizes
+    assert min(sizes.values()) > 1000  # a real count: 36 intervals or more a section
+    drawing = st.resolve(DATA / "svg-corpus" / "vivus-hi-there.svg", size="6m", tol="1mm").figure
+    assert planner_figure_unknowns(drawing, None, options) > 5 * DEFAULT_PLAN_UNKNOWNS

@@ -31,12 +31,12 @@ import numpy as np
 from .dynamics.controls import ControlSchedule
 from .dynamics.model import SleighParams
 from .figures.figure import Figure, Section
-from .planning.planner import plan_figure
+from .planning.planner import figure_unknowns, plan_figure
 from .tracing.sections import FigureTrace, TraceOptions, TraceStatus, trace_figure
 from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
 
-__all__ = ["REST_POLICIES", "DefaultReachTrace", "ReachPoint", "ReachSweep", "VerifiedTrace", "add_rests",
+__all__ = ["DEFAULT_PLAN_UNKNOWNS", "REST_POLICIES", "DefaultReachTrace", "ReachPoint", "ReachSweep", "VerifiedTrace", "add_rests",
            "middle_join", "sweep_reach", "trace_and_verify", "trace_within_default_reach"]
 
 REST_POLICIES = ("auto", "never", "joins")
@@ -202,43 +202,62 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         current = add_rests(figure, added)
 
 
+#: The most unknowns, over all its curves' programs, of a figure that :func:`trace_within_default_reach`
+#: plans: as many as one program may have (:data:`~skatetrace.planning.collocation.MAX_UNKNOWNS`).
+#: The school figures have 2,170 to 10,096 and are planned, traced and verified in 1.5 to 8.9 s;
+#: the 26 corpus drawings above it (12,082 to 80,779) took 3.5 to 145 s planned, 21 s at the
+#: median, against at most 45 s (3 s at the median) with the launch-glide-stop manoeuvres
+#: (``bench/CORPUS.md``, measured 2026-11-26).
+DEFAULT_PLAN_UNKNOWNS = 12_000
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class DefaultReachTrace:
     """What :func:`trace_within_default_reach` made: the result kept and the options it was made with.
 
-    ``fell_back`` says why the plan was given up for the launch-glide-stop trace: ``"unplanned"``
-    (a section has no plan) or ``"unverified"`` (the plan's replay failed the verification), with
-    the plan's ``reason``; empty where the plan (or, failing everything, the whole plan) is kept.
+    ``fell_back`` says why the launch-glide-stop trace was kept instead of a plan: ``"too large"``
+    (the figure's programs have more unknowns than the default reach plans: it was not planned),
+    ``"unplanned"`` (a section has no plan) or ``"unverified"`` (the plan's replay failed the
+    verification), and ``reason`` says more; both are empty where the plan (or, failing
+    everything, the whole plan) is kept. ``unknowns`` is the size of the figure's programs.
     """
 
     result: VerifiedTrace
     options: TraceOptions
+    unknowns: int
     fell_back: str = ""
     reason: str = ""
 
 
 def trace_within_default_reach(figure: Figure, params: SleighParams | None, options: TraceOptions, *,
                                rests: str = "auto", rel_tol: float = 1e-6, limits: HumanLimits | None = None,
-                               progress=None) -> DefaultReachTrace:
+                               progress=None, max_unknowns: int | None = DEFAULT_PLAN_UNKNOWNS) -> DefaultReachTrace:
     """A reach the user did not ask for: the plan within ``options.reach`` where it traces and verifies
     the figure, else the launch-glide-stop manoeuvres (``reach=None``) where they do.
 
     This is what ``skatetrace trace`` does for a figure in metres without ``--reach``: the user asked
-    for a trace, not a plan. Planned all or nothing (``options.all_or_nothing``): once a section has
-    no plan, no curve is planned further. Given up when
+    for a trace, not a plan. The launch-glide-stop trace is kept when
 
-    - a section has no plan, and the launch-glide-stop manoeuvres trace every section; where they do
-      not either, the whole plan (every curve planned as far as it goes, ``all_or_nothing=False``)
-      is made and kept with its failures;
-    - the plan traces every section but its replay fails the verification, and the launch-glide-stop
-      trace passes it. A plan is exact to the finish's residuals (1e-10 at the shooting segments'
-      joins); where a section moves the mass behind the blade for long, the open loop amplifies
-      them beyond the tolerance (measured: a 6 m line, 1e-10 grown to 1e-6 rad of heading).
+    - the figure's programs have more than ``max_unknowns`` unknowns in all
+      (:func:`~skatetrace.planning.planner.figure_unknowns`): such a figure is not planned, which
+      would take tens of seconds to minutes, and the launch-glide-stop trace is kept whatever its
+      outcome (a drawing of 150 pieces whose trace failed a section failed its plan too, after
+      175 s);
+    - a section has no plan, and it traces every section. Planned all or nothing
+      (``options.all_or_nothing``), no curve is planned further once a section has no plan; where
+      the launch-glide-stop trace fails too, the whole plan (every curve planned as far as it goes,
+      ``all_or_nothing=False``) is made and kept with its failures;
+    - the plan traces every section but its replay fails the verification, and it passes. A plan
+      is exact to the finish's residuals (1e-10 at the shooting segments' joins); where a section
+      moves the mass behind the blade for long, the open loop amplifies them beyond the tolerance
+      (measured: a 6 m line, 1e-10 grown to 1e-6 rad of heading).
 
     Parameters
     ----------
     options : TraceOptions
         With ``reach`` set; the rest as for :func:`trace_and_verify`.
+    max_unknowns : int or None
+        The largest figure planned (None: any).
 
     Returns
     -------
@@ -247,27 +266,40 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     """
     if options.reach is None:
         raise ValueError("trace_within_default_reach needs options.reach (a reach to plan within), got None")
-    done = trace_and_verify(figure, params, options, rests=rests, rel_tol=rel_tol, limits=limits, progress=progress)
+    if max_unknowns is not None and (isinstance(max_unknowns, bool) or not isinstance(max_unknowns, int)
+                                     or max_unknowns < 0):
+        raise ValueError(f"max_unknowns must be a whole number >= 0 or None, got {max_unknowns!r}")
+
+    def run(opts: TraceOptions) -> VerifiedTrace:
+        return trace_and_verify(figure, params, opts, rests=rests, rel_tol=rel_tol, limits=limits, progress=progress)
+
+    def traced(result: VerifiedTrace) -> bool:
+        return all(s.success for s in result.trace.sections)
+
+    size = figure_unknowns(figure, params, options)
+    unbounded = replace(options, reach=None, all_or_nothing=False)
+    if max_unknowns is not None and size > max_unknowns:
+        return DefaultReachTrace(result=run(unbounded), options=unbounded, unknowns=size, fell_back="too large",
+                                 reason=f"its programs would have {size:,} unknowns, more than the "
+                                        f"{max_unknowns:,} the default reach plans")
+    done = run(options)
     if done.success:
-        return DefaultReachTrace(result=done, options=options)
+        return DefaultReachTrace(result=done, options=options, unknowns=size)
     bad = [s for s in done.trace.sections if not s.success]
     # a reason, not "skipped" (all or nothing)
     failed = next((s for s in bad if s.status is not TraceStatus.NOT_PLANNED), bad[0]).message if bad else None
-    unbounded = replace(options, reach=None, all_or_nothing=False)
-    again = trace_and_verify(figure, params, unbounded, rests=rests, rel_tol=rel_tol, limits=limits,
-                             progress=progress)
+    again = run(unbounded)
     if failed is None:  # every section planned, the replay failed
         if again.success:
-            return DefaultReachTrace(result=again, options=unbounded, fell_back="unverified",
+            return DefaultReachTrace(result=again, options=unbounded, unknowns=size, fell_back="unverified",
                                      reason=done.report.message)
-        return DefaultReachTrace(result=done, options=options)
-    if all(s.success for s in again.trace.sections):
-        return DefaultReachTrace(result=again, options=unbounded, fell_back="unplanned", reason=failed)
+        return DefaultReachTrace(result=done, options=options, unknowns=size)
+    if traced(again):
+        return DefaultReachTrace(result=again, options=unbounded, unknowns=size, fell_back="unplanned", reason=failed)
     if not options.all_or_nothing:
-        return DefaultReachTrace(result=done, options=options)
+        return DefaultReachTrace(result=done, options=options, unknowns=size)
     whole = replace(options, all_or_nothing=False)
-    return DefaultReachTrace(result=trace_and_verify(figure, params, whole, rests=rests, rel_tol=rel_tol,
-                                                     limits=limits, progress=progress), options=whole)
+    return DefaultReachTrace(result=run(whole), options=whole, unknowns=size)
 
 
 _PEAKS = ("max_abs_a", "max_abs_b", "peak_abs_adot", "peak_abs_bdot", "peak_mass_kinetic_energy")

@@ -371,11 +371,13 @@ def _trace(args) -> int:
             kept = trace_within_default_reach(figure, params, options, rests=args.rests, rel_tol=args.verify_tol,
                                               limits=limits, progress=progress)
             if kept.fell_back:
-                what = ("not every section could be planned within" if kept.fell_back == "unplanned"
-                        else "the plan's replay failed the verification within")
+                what = {"too large": "this figure is not planned within",
+                        "unplanned": "not every section could be planned within",
+                        "unverified": "the plan's replay failed the verification within"}[kept.fell_back]
+                ask = ("Give --reach auto to plan it (tens of seconds to minutes)" if kept.fell_back == "too large"
+                       else "Give --reach to see the plan and its failures")
                 print(f"note: {what} the default reach {options.reach:.4g} m ({kept.reason}); traced with the "
-                      f"launch-glide-stop manoeuvres instead (as --reach none). Give --reach to see the plan and "
-                      f"its failures")
+                      f"launch-glide-stop manoeuvres instead (as --reach none). {ask}")
             done, options = kept.result, kept.options
         else:
             done = trace_and_verify(figure, params, options, rests=args.rests, rel_tol=args.verify_tol,

@@ -30,7 +30,7 @@ from ..processes import recording_interrupts
 from .symbolic import sleigh_functions
 
 __all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "program_too_large",
-           "solve_program"]
+           "program_unknowns", "solve_program"]
 
 _DEGREE = 3
 #: IPOPT's ends that may still leave a feasible point, and the largest constraint violation of one.
@@ -280,6 +280,11 @@ def _too_large(layout, n: int, o: ProgramOptions) -> str | None:
             f"lasts {longest:.3g} of the planner's time units, at one mesh interval per {o.interval_duration:g}, and "
             f"its {pieces:,} pieces have at least 3 intervals each): trace a figure this long or this finely "
             "pieced with the launch-glide-stop manoeuvres (--reach none), or in parts")
+
+
+def program_unknowns(sections: list[SectionSpec], options: ProgramOptions) -> int:
+    """The number of unknowns of the program of ``sections`` on its default mesh (nothing is built)."""
+    return _layout(sections, options, None)[1]
 
 
 def program_too_large(sections: list[SectionSpec], options: ProgramOptions) -> str | None:

@@ -40,12 +40,13 @@ from ..figures.figure import Figure
 from ..figures.geometry import end_pose
 from ..tracing.maneuver import _singular_distances
 from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceStatus, _Phase, _with_metrics
-from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, program_too_large, solve_program
+from .collocation import (PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, program_too_large, program_unknowns,
+                          solve_program)
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
 from .pool import solve_programs
 
-__all__ = ["plan_figure", "curve_specs", "DURATION_PER_LENGTH", "TOP_SPEED"]
+__all__ = ["plan_figure", "curve_specs", "figure_unknowns", "DURATION_PER_LENGTH", "TOP_SPEED"]
 
 #: Each section lasts this many times its length over the glide speed (least effort at a given pace:
 #: a launch and a stop each of a fifth of the section around a glide at the speed).
@@ -73,6 +74,13 @@ def curve_specs(curve) -> tuple[list[SectionSpec], list]:
         last = sec.pieces[-1]
         prev_heading = end_pose(last.start, last.segment).heading
     return specs, sections
+
+
+def figure_unknowns(figure: Figure, params: SleighParams | None, options: TraceOptions) -> int:
+    """The unknowns of the programs that plan ``figure`` within ``options.reach``, a program per
+    curve on its default mesh: what planning it costs (IPOPT's iterations grow dearer with it)."""
+    popts = _program_options(params or figure.params or SleighParams(), options)
+    return sum(program_unknowns(curve_specs(curve)[0], popts) for curve in figure.curves)
 
 
 def _closing_turn(curve, sections) -> float | None:
