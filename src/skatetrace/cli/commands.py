@@ -335,7 +335,8 @@ def _compiling():
 def _trace(args) -> int:
     from ..outputs.results import reporting as writing
     from ..outputs.results import write_results
-    from ..pipeline import trace_and_verify, trace_within_default_reach
+    from ..pipeline import DEFAULT_PLAN_UNKNOWNS, trace_and_verify, trace_within_default_reach
+    from ..planning.planner import figure_unknowns
     from ..verification.verify import reporting as verifying
 
     t0 = time.perf_counter()
@@ -350,7 +351,9 @@ def _trace(args) -> int:
     options = TraceOptions(speed=speed, reach=_reach(args, res.unit), objective=args.objective,
                            max_accel=args.max_accel, workers=args.workers, reach_hint=args.reach is not None,
                            all_or_nothing=args.reach is None)
-    if options.reach is not None:
+    # a default reach plans a figure only up to a size (trace_within_default_reach), which a note says later
+    if options.reach is not None and (args.reach is not None
+                                      or figure_unknowns(figure, params, options) <= DEFAULT_PLAN_UNKNOWNS):
         print(f"note: planning the mass's motion within {options.reach:.4g} {res.unit if res.unit == 'm' else 'model units'} "
               f"of the blade for least {options.objective} (--reach none: the launch-glide-stop manoeuvres)")
     for note in res.notes:
