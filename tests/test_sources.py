@@ -387,3 +387,29 @@ def test_a_drawing_with_a_tiny_closing_piece_is_fitted_without_it_and_within_the
     # no section is shorter than the tolerance any more (the 0.25 mm step was one)
     shortest = min(sum(p.segment.length for p in s.pieces) for c in r.figure.curves for s in c.sections())
     assert shortest > 1e-3
+
+
+def test_a_tiny_piece_between_two_kinks_made_corners_is_absorbed_too(tmp_path):
+    # An Adwaita icon (emotes/face-sick-symbolic): its joins turn too little to be corners (under
+    # 0.5 degrees) yet too much to be kept smooth, so they are made corners from the tolerance; a
+    # closing line of 0.43 mm between two of them was then a section of its own, which nothing
+    # traces from rest to rest ("no stop of length 0.000214 found"). Here: 0.1 degree kinks at both
+    # ends of a 0.6 mm line.
+    d = np.radians([0.0, 0.1, 0.2])
+    pts = [(0.0, 0.0), (10.0, 0.0)]
+    for angle, length in ((d[1], 0.002), (d[2], 10.0)):
+        pts.append((pts[-1][0] + length * np.cos(angle), pts[-1][1] + length * np.sin(angle)))
+    pts.append((pts[-1][0], 8.0))
+    path = tmp_path / "kinks.svg"
+    path.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M' + " L".join(f"{float(x)!r} {float(y)!r}" for x, y in pts)
+                    + ' Z" stroke="black" fill="none"/></svg>')
+    r = resolve(str(path), size="6m", tol="1mm")
+    assert any("made corners (rests)" in n for n in r.notes)
+    assert any(n.startswith("absorbed the pieces between two such corners") for n in r.notes)
+    assert r.fit.success and r.fit.hausdorff <= 1e-3  # to the drawing as given, the move included
+    lengths = [sum(p.segment.length for p in s.pieces) for c in r.figure.curves for s in c.sections()]
+    assert len(lengths) == 4 and min(lengths) > 1e-3
+    from skatetrace import TraceOptions, trace_and_verify
+
+    done = trace_and_verify(r.figure, r.figure.params, TraceOptions(speed=2.0))
+    assert done.success, done.message
