@@ -539,8 +539,8 @@ def test_a_drawing_too_large_to_plan_by_default_is_traced_with_the_launch_glide_
     assert main(["trace", drawing, "--size", "6m", "--tol", "1mm", "--out", str(out), "--no-plots",
                  "--no-viewer"]) == 0
     printed = capsys.readouterr().out
-    assert ("this figure is not planned within the default reach 0.4896 m (its programs would have 14,512 unknowns, "
-            "more than the 12,000 the default reach plans); traced with the launch-glide-stop") in printed
+    assert ("this figure is not planned within the default reach 0.4896 m (14,512 unknowns in its programs, more "
+            "than 12,000: larger than a school figure); traced with the launch-glide-stop") in printed
     assert "Give --reach auto to plan it" in printed and "note: planning the mass's motion" not in printed
     assert json.loads((out / "result.json").read_text())["options"]["reach"] is None
 

@@ -650,20 +650,21 @@ def test_the_default_reach_gives_up_a_plan_whose_replay_fails_for_the_launch_gli
     made = mocked_plans(plan_verifies=True)
     kept = st.trace_within_default_reach(fig, None, options, rests="never")
     assert kept.result.success and kept.fell_back == "" and [o.reach for o in made] == [1.0]
-    with pytest.raises(ValueError, match="needs options.reach"):
+    with pytest.raises(ValueError, match="planning needs options.reach"):
         st.trace_within_default_reach(fig, None, st.TraceOptions(), rests="never")
 
 
 def test_the_default_reach_traces_a_figure_too_large_to_plan_with_the_launch_glide_stop_manoeuvres(mocked_plans,
                                                                                                     monkeypatch):
+    from skatetrace.pipeline import too_large_to_plan
+
     fig = figure_from_dict(CUSPS["pivot"])
     options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True)
     size = planner_figure_unknowns(fig, None, options)
     made = mocked_plans(plan_verifies=True)
     kept = st.trace_within_default_reach(fig, None, options, rests="never", max_unknowns=size - 1)
     assert kept.fell_back == "too large" and kept.unknowns == size and [o.reach for o in made] == [None]
-    assert f"its programs would have {size:,} unknowns, more than the {size - 1:,} the default reach plans" \
-        == kept.reason
+    assert kept.reason == f"{size:,} unknowns in its programs, more than {size - 1:,}: larger than a school figure"
     assert kept.result.success and kept.options.reach is None
     made = mocked_plans(plan_verifies=True)
     kept = st.trace_within_default_reach(fig, None, options, rests="never", max_unknowns=size)
@@ -686,12 +687,24 @@ def test_the_default_reach_traces_a_figure_too_large_to_plan_with_the_launch_gli
     for bad in (-1, 1.5, True, "12000"):
         with pytest.raises(ValueError, match="max_unknowns must be a whole number"):
             st.trace_within_default_reach(fig, None, options, max_unknowns=bad)
+        with pytest.raises(ValueError, match="max_pieces must be a whole number"):
+            st.trace_within_default_reach(fig, None, options, max_pieces=bad)
+    # too many pieces, whatever the unknowns: a drawing's IPOPT iterations grow with its pieces
+    pieces = sum(len(c.pieces) for c in fig.curves)
+    reason = too_large_to_plan(fig, None, options, max_pieces=pieces - 1, max_unknowns=None)
+    assert reason == f"{pieces} pieces, more than {pieces - 1}: larger than a school figure"
+    assert too_large_to_plan(fig, None, options, max_pieces=pieces - 1, max_unknowns=size - 1) == (
+        f"{size:,} unknowns in its programs, more than {size - 1:,} and {pieces} pieces, more than {pieces - 1}: "
+        "larger than a school figure")
+    assert too_large_to_plan(fig, None, options, max_pieces=pieces, max_unknowns=size) == ""
 
 
 DATA = Path(__file__).parent / "data"
 
 
 def test_every_school_figure_is_small_enough_for_the_default_reach_to_plan():
+    from skatetrace.pipeline import too_large_to_plan
+
     # issue 15: a skater's figure is planned by default; the bound is what keeps drawings of
     # thousands of unknowns (minutes of IPOPT) to the launch-glide-stop manoeuvres
     from skatetrace.pipeline import DEFAULT_PLAN_UNKNOWNS
@@ -701,5 +714,8 @@ def test_every_school_figure_is_small_enough_for_the_default_reach_to_plan():
              for name in st.school_names()}
     assert max(sizes.values()) <= DEFAULT_PLAN_UNKNOWNS, sizes
     assert min(sizes.values()) > 1000  # a real count: 36 intervals or more a section
+    for name in st.school_names():
+        assert too_large_to_plan(st.school_figure(name, height=1.7), st.skater_params(height=1.7), options) == ""
     drawing = st.resolve(DATA / "svg-corpus" / "vivus-hi-there.svg", size="6m", tol="1mm").figure
     assert planner_figure_unknowns(drawing, None, options) > 5 * DEFAULT_PLAN_UNKNOWNS
+    assert too_large_to_plan(drawing, None, options).startswith("80,")

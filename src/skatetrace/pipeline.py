@@ -36,8 +36,9 @@ from .tracing.sections import FigureTrace, TraceOptions, TraceStatus, trace_figu
 from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
 
-__all__ = ["DEFAULT_PLAN_UNKNOWNS", "REST_POLICIES", "DefaultReachTrace", "ReachPoint", "ReachSweep", "VerifiedTrace", "add_rests",
-           "middle_join", "sweep_reach", "trace_and_verify", "trace_within_default_reach"]
+__all__ = ["DEFAULT_PLAN_PIECES", "DEFAULT_PLAN_UNKNOWNS", "REST_POLICIES", "DefaultReachTrace", "ReachPoint",
+           "ReachSweep", "VerifiedTrace", "add_rests", "middle_join", "sweep_reach", "too_large_to_plan",
+           "trace_and_verify", "trace_within_default_reach"]
 
 REST_POLICIES = ("auto", "never", "joins")
 
@@ -202,13 +203,16 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         current = add_rests(figure, added)
 
 
-#: The most unknowns, over all its curves' programs, of a figure that :func:`trace_within_default_reach`
-#: plans: as many as one program may have (:data:`~skatetrace.planning.collocation.MAX_UNKNOWNS`).
-#: The school figures have 2,170 to 10,096 and are planned, traced and verified in 1.5 to 8.9 s;
-#: the 26 corpus drawings above it (12,082 to 80,779) took 3.5 to 145 s planned, 21 s at the
-#: median, against at most 45 s (3 s at the median) with the launch-glide-stop manoeuvres
-#: (``bench/CORPUS.md``, measured 2026-11-26).
+#: The largest figure :func:`trace_within_default_reach` plans: a school figure's size. At most as
+#: many unknowns in all its curves' programs as one program may have
+#: (:data:`~skatetrace.planning.collocation.MAX_UNKNOWNS`), and at most this many pieces. The
+#: school figures have 2,170 to 10,096 unknowns and 2 to 28 pieces, and are planned, traced and
+#: verified in 1.5 to 8.9 s. A drawing's IPOPT iterations grow with its pieces as well as its
+#: unknowns: icons of 40 to 90 pieces in under 12,000 unknowns took 20 to 40 s planned (the Adwaita
+#: set, 2026-11-26), and the corpus drawings above either bound took up to 145 s, 21 s at the
+#: median, against 3 s with the launch-glide-stop manoeuvres (``bench/CORPUS.md``).
 DEFAULT_PLAN_UNKNOWNS = 12_000
+DEFAULT_PLAN_PIECES = 32
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -216,7 +220,7 @@ class DefaultReachTrace:
     """What :func:`trace_within_default_reach` made: the result kept and the options it was made with.
 
     ``fell_back`` says why the launch-glide-stop trace was kept instead of a plan: ``"too large"``
-    (the figure's programs have more unknowns than the default reach plans: it was not planned),
+    (the figure is larger than the default reach plans: it was not planned),
     ``"unplanned"`` (a section has no plan) or ``"unverified"`` (the plan's replay failed the
     verification), and ``reason`` says more; both are empty where the plan (or, failing
     everything, the whole plan) is kept. ``unknowns`` is the size of the figure's programs.
@@ -229,9 +233,34 @@ class DefaultReachTrace:
     reason: str = ""
 
 
+def too_large_to_plan(figure: Figure, params: SleighParams | None, options: TraceOptions, *,
+                      max_unknowns: int | None = DEFAULT_PLAN_UNKNOWNS,
+                      max_pieces: int | None = DEFAULT_PLAN_PIECES) -> str:
+    """Why :func:`trace_within_default_reach` would not plan ``figure`` within ``options.reach``
+    (larger than a school figure, :data:`DEFAULT_PLAN_UNKNOWNS`), or ``""`` where it would.
+
+    Raises
+    ------
+    ValueError
+        If a bound is not a whole number >= 0 (or None: no bound), or ``options.reach`` is None.
+    """
+    if options.reach is None:
+        raise ValueError("planning needs options.reach (a reach to plan within), got None")
+    for name, bound in (("max_unknowns", max_unknowns), ("max_pieces", max_pieces)):
+        if bound is not None and (isinstance(bound, bool) or not isinstance(bound, int) or bound < 0):
+            raise ValueError(f"{name} must be a whole number >= 0 or None, got {bound!r}")
+    size = figure_unknowns(figure, params, options)
+    pieces = sum(len(curve.pieces) for curve in figure.curves)
+    beyond = ([f"{size:,} unknowns in its programs, more than {max_unknowns:,}"]
+              if max_unknowns is not None and size > max_unknowns else []) \
+        + ([f"{pieces:,} pieces, more than {max_pieces:,}"] if max_pieces is not None and pieces > max_pieces else [])
+    return f"{' and '.join(beyond)}: larger than a school figure" if beyond else ""
+
+
 def trace_within_default_reach(figure: Figure, params: SleighParams | None, options: TraceOptions, *,
                                rests: str = "auto", rel_tol: float = 1e-6, limits: HumanLimits | None = None,
-                               progress=None, max_unknowns: int | None = DEFAULT_PLAN_UNKNOWNS) -> DefaultReachTrace:
+                               progress=None, max_unknowns: int | None = DEFAULT_PLAN_UNKNOWNS,
+                               max_pieces: int | None = DEFAULT_PLAN_PIECES) -> DefaultReachTrace:
     """A reach the user did not ask for: the plan within ``options.reach`` where it traces and verifies
     the figure, else the launch-glide-stop manoeuvres (``reach=None``) where they do.
 
@@ -239,8 +268,9 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     for a trace, not a plan. The launch-glide-stop trace is kept when
 
     - the figure's programs have more than ``max_unknowns`` unknowns in all
-      (:func:`~skatetrace.planning.planner.figure_unknowns`): such a figure is not planned, which
-      would take tens of seconds to minutes, and the launch-glide-stop trace is kept whatever its
+      (:func:`~skatetrace.planning.planner.figure_unknowns`), or the figure more than
+      ``max_pieces`` pieces: such a figure is not planned, which would take tens of seconds to
+      minutes, and the launch-glide-stop trace is kept whatever its
       outcome (a drawing of 150 pieces whose trace failed a section failed its plan too, after
       175 s);
     - a section has no plan, and it traces every section. Planned all or nothing
@@ -256,7 +286,7 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     ----------
     options : TraceOptions
         With ``reach`` set; the rest as for :func:`trace_and_verify`.
-    max_unknowns : int or None
+    max_unknowns, max_pieces : int or None
         The largest figure planned (None: any).
 
     Returns
@@ -264,11 +294,7 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     DefaultReachTrace
         ``fell_back`` and ``reason`` say why the launch-glide-stop trace was kept, if it was.
     """
-    if options.reach is None:
-        raise ValueError("trace_within_default_reach needs options.reach (a reach to plan within), got None")
-    if max_unknowns is not None and (isinstance(max_unknowns, bool) or not isinstance(max_unknowns, int)
-                                     or max_unknowns < 0):
-        raise ValueError(f"max_unknowns must be a whole number >= 0 or None, got {max_unknowns!r}")
+    beyond = too_large_to_plan(figure, params, options, max_unknowns=max_unknowns, max_pieces=max_pieces)
 
     def run(opts: TraceOptions) -> VerifiedTrace:
         return trace_and_verify(figure, params, opts, rests=rests, rel_tol=rel_tol, limits=limits, progress=progress)
@@ -278,10 +304,9 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
 
     size = figure_unknowns(figure, params, options)
     unbounded = replace(options, reach=None, all_or_nothing=False)
-    if max_unknowns is not None and size > max_unknowns:
+    if beyond:
         return DefaultReachTrace(result=run(unbounded), options=unbounded, unknowns=size, fell_back="too large",
-                                 reason=f"its programs would have {size:,} unknowns, more than the "
-                                        f"{max_unknowns:,} the default reach plans")
+                                 reason=beyond)
     done = run(options)
     if done.success:
         return DefaultReachTrace(result=done, options=options, unknowns=size)

@@ -335,8 +335,7 @@ def _compiling():
 def _trace(args) -> int:
     from ..outputs.results import reporting as writing
     from ..outputs.results import write_results
-    from ..pipeline import DEFAULT_PLAN_UNKNOWNS, trace_and_verify, trace_within_default_reach
-    from ..planning.planner import figure_unknowns
+    from ..pipeline import too_large_to_plan, trace_and_verify, trace_within_default_reach
     from ..verification.verify import reporting as verifying
 
     t0 = time.perf_counter()
@@ -352,8 +351,7 @@ def _trace(args) -> int:
                            max_accel=args.max_accel, workers=args.workers, reach_hint=args.reach is not None,
                            all_or_nothing=args.reach is None)
     # a default reach plans a figure only up to a size (trace_within_default_reach), which a note says later
-    if options.reach is not None and (args.reach is not None
-                                      or figure_unknowns(figure, params, options) <= DEFAULT_PLAN_UNKNOWNS):
+    if options.reach is not None and (args.reach is not None or not too_large_to_plan(figure, params, options)):
         print(f"note: planning the mass's motion within {options.reach:.4g} {res.unit if res.unit == 'm' else 'model units'} "
               f"of the blade for least {options.objective} (--reach none: the launch-glide-stop manoeuvres)")
     for note in res.notes:
@@ -377,7 +375,7 @@ def _trace(args) -> int:
                 what = {"too large": "this figure is not planned within",
                         "unplanned": "not every section could be planned within",
                         "unverified": "the plan's replay failed the verification within"}[kept.fell_back]
-                ask = ("Give --reach auto to plan it (tens of seconds to minutes)" if kept.fell_back == "too large"
+                ask = ("Give --reach auto to plan it (tens of seconds or more)" if kept.fell_back == "too large"
                        else "Give --reach to see the plan and its failures")
                 print(f"note: {what} the default reach {options.reach:.4g} m ({kept.reason}); traced with the "
                       f"launch-glide-stop manoeuvres instead (as --reach none). {ask}")
