@@ -208,9 +208,10 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
 #: (:data:`~skatetrace.planning.collocation.MAX_UNKNOWNS`), and at most this many pieces. The
 #: school figures have 2,170 to 10,096 unknowns and 2 to 28 pieces, and are planned, traced and
 #: verified in 1.5 to 8.9 s. A drawing's IPOPT iterations grow with its pieces as well as its
-#: unknowns: icons of 40 to 90 pieces in under 12,000 unknowns took 20 to 40 s planned (the Adwaita
-#: set, 2026-11-26), and the corpus drawings above either bound took up to 145 s, 21 s at the
-#: median, against 3 s with the launch-glide-stop manoeuvres (``bench/CORPUS.md``).
+#: unknowns: lucide-signature (45 pieces, 7,815 unknowns) took 19.5 s planned against 7.8 s traced
+#: with the launch-glide-stop manoeuvres, heroicons-star-solid-20 (49, 8,493) 11.2 s against 1.4 s,
+#: and the corpus drawings above 12,000 unknowns up to 145 s, 21 s at the median, against 3 s
+#: (``bench/CORPUS.md``, 2026-11-26).
 DEFAULT_PLAN_UNKNOWNS = 12_000
 DEFAULT_PLAN_PIECES = 32
 
