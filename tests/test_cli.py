@@ -1,5 +1,6 @@
 import csv
 import json
+import re
 import subprocess
 import sys
 
@@ -539,8 +540,10 @@ def test_a_drawing_too_large_to_plan_by_default_is_traced_with_the_launch_glide_
     assert main(["trace", drawing, "--size", "6m", "--tol", "1mm", "--out", str(out), "--no-plots",
                  "--no-viewer"]) == 0
     printed = capsys.readouterr().out
-    assert ("this figure is not planned within the default reach 0.4896 m (14,512 unknowns in its programs, more "
-            "than 12,000: larger than a school figure); traced with the launch-glide-stop") in printed
+    # 14,512 unknowns here (16 pieces): the count is asserted only as far as round-off cannot move it
+    assert re.search(r"this figure is not planned within the default reach 0\.4896 m \(14,\d{3} unknowns in its "
+                     r"programs, more than 12,000: larger than a school figure\); traced with the launch-glide-stop",
+                     printed), printed
     assert "Give --reach auto to plan it" in printed and "note: planning the mass's motion" not in printed
     assert json.loads((out / "result.json").read_text())["options"]["reach"] is None
 
