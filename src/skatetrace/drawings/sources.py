@@ -317,7 +317,8 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         # A tiny piece between two of these corners is then a section of its own, too short to
         # launch and stop on (0.43 mm in an icon at 6 m): absorbed as above, where the fit allows.
         retry, absorbed_note = None, []
-        tiny, tiny_moves = fitted.absorbed(2.0 * ABSORB_SHARE * fit_tol, tight)
+        tiny, tiny_moves = (fitted.absorbed(2.0 * ABSORB_SHARE * fit_tol, tight)
+                            if exact is None or exact is False else (fitted, {}))
         if tiny_moves:
             retry = fit_drawing(tiny, fit_tol - max(tiny_moves.values()), method=method, corner_tol_deg=tight,
                                 soft_corners=False)
