@@ -234,6 +234,24 @@ class DefaultReachTrace:
     reason: str = ""
 
 
+def _plan_size(figure: Figure, params: SleighParams | None, options: TraceOptions) -> tuple[int, int]:
+    """The unknowns of ``figure``'s programs within ``options.reach`` and its number of pieces."""
+    if options.reach is None:
+        raise ValueError("planning needs options.reach (a reach to plan within), got None")
+    return figure_unknowns(figure, params, options), sum(len(curve.pieces) for curve in figure.curves)
+
+
+def _beyond(size: int, pieces: int, max_unknowns: int | None, max_pieces: int | None) -> str:
+    """Why a figure of ``size`` unknowns and ``pieces`` pieces is larger than the bounds, or ``""``."""
+    for name, bound in (("max_unknowns", max_unknowns), ("max_pieces", max_pieces)):
+        if bound is not None and (isinstance(bound, bool) or not isinstance(bound, int) or bound < 0):
+            raise ValueError(f"{name} must be a whole number >= 0 or None, got {bound!r}")
+    beyond = ([f"{size:,} unknowns in its programs, more than {max_unknowns:,}"]
+              if max_unknowns is not None and size > max_unknowns else []) \
+        + ([f"{pieces:,} pieces, more than {max_pieces:,}"] if max_pieces is not None and pieces > max_pieces else [])
+    return f"{' and '.join(beyond)}: larger than a school figure" if beyond else ""
+
+
 def too_large_to_plan(figure: Figure, params: SleighParams | None, options: TraceOptions, *,
                       max_unknowns: int | None = DEFAULT_PLAN_UNKNOWNS,
                       max_pieces: int | None = DEFAULT_PLAN_PIECES) -> str:
@@ -245,17 +263,7 @@ def too_large_to_plan(figure: Figure, params: SleighParams | None, options: Trac
     ValueError
         If a bound is not a whole number >= 0 (or None: no bound), or ``options.reach`` is None.
     """
-    if options.reach is None:
-        raise ValueError("planning needs options.reach (a reach to plan within), got None")
-    for name, bound in (("max_unknowns", max_unknowns), ("max_pieces", max_pieces)):
-        if bound is not None and (isinstance(bound, bool) or not isinstance(bound, int) or bound < 0):
-            raise ValueError(f"{name} must be a whole number >= 0 or None, got {bound!r}")
-    size = figure_unknowns(figure, params, options)
-    pieces = sum(len(curve.pieces) for curve in figure.curves)
-    beyond = ([f"{size:,} unknowns in its programs, more than {max_unknowns:,}"]
-              if max_unknowns is not None and size > max_unknowns else []) \
-        + ([f"{pieces:,} pieces, more than {max_pieces:,}"] if max_pieces is not None and pieces > max_pieces else [])
-    return f"{' and '.join(beyond)}: larger than a school figure" if beyond else ""
+    return _beyond(*_plan_size(figure, params, options), max_unknowns, max_pieces)
 
 
 def trace_within_default_reach(figure: Figure, params: SleighParams | None, options: TraceOptions, *,
@@ -295,15 +303,12 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     DefaultReachTrace
         ``fell_back`` and ``reason`` say why the launch-glide-stop trace was kept, if it was.
     """
-    beyond = too_large_to_plan(figure, params, options, max_unknowns=max_unknowns, max_pieces=max_pieces)
+    size, pieces = _plan_size(figure, params, options)
+    beyond = _beyond(size, pieces, max_unknowns, max_pieces)
 
     def run(opts: TraceOptions) -> VerifiedTrace:
         return trace_and_verify(figure, params, opts, rests=rests, rel_tol=rel_tol, limits=limits, progress=progress)
 
-    def traced(result: VerifiedTrace) -> bool:
-        return all(s.success for s in result.trace.sections)
-
-    size = figure_unknowns(figure, params, options)
     unbounded = replace(options, reach=None, all_or_nothing=False)
     if beyond:
         return DefaultReachTrace(result=run(unbounded), options=unbounded, unknowns=size, fell_back="too large",
@@ -320,7 +325,7 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
             return DefaultReachTrace(result=again, options=unbounded, unknowns=size, fell_back="unverified",
                                      reason=done.report.message)
         return DefaultReachTrace(result=done, options=options, unknowns=size)
-    if traced(again):
+    if all(s.success for s in again.trace.sections):
         return DefaultReachTrace(result=again, options=unbounded, unknowns=size, fell_back="unplanned", reason=failed)
     if not options.all_or_nothing:
         return DefaultReachTrace(result=done, options=options, unknowns=size)
