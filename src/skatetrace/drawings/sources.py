@@ -258,6 +258,31 @@ def _kink_corner_deg(drawing: Drawing, tol: float) -> float:
     return min(EXACT_MAX_CORNER_DEG, math.degrees(tol / (10.0 * length))) if length > 0 else EXACT_MAX_CORNER_DEG
 
 
+def _absorbed_fit(fitted: Drawing, fit_tol: float, gaps: dict[str, float], corner_deg: float, arc_mode: bool, fit):
+    """The pieces shorter than ``2 ABSORB_SHARE`` times ``fit_tol`` between two joins turning by more
+    than ``corner_deg`` absorbed into their neighbours (arc mode only), and ``fit(drawing, tol)`` of
+    that drawing in what is left of the tolerance.
+
+    Returns ``(fit, drawing, tol, gaps, moves)``: the fit (None where nothing was absorbed), and
+    the drawing, tolerance, gaps and moves to go on with: the absorbed ones where the fit
+    succeeded, else those given (and no moves).
+    """
+    absorbed, moves = fitted.absorbed(2.0 * ABSORB_SHARE * fit_tol, corner_deg) if arc_mode else (fitted, {})
+    if not moves:
+        return None, fitted, fit_tol, gaps, {}
+    result = fit(absorbed, fit_tol - max(moves.values()))
+    if not result.success:
+        return result, fitted, fit_tol, gaps, {}
+    merged = {name: gaps.get(name, 0.0) + moves.get(name, 0.0) for name in {*gaps, *moves}}
+    return result, absorbed, fit_tol - max(moves.values()), merged, moves
+
+
+def _absorbed_note(moves: dict[str, float], corners: str, unit: str) -> str:
+    return (f"absorbed the pieces between two {corners} shorter than {2.0 * ABSORB_SHARE:.3g} x the tolerance into "
+            f"their neighbours, moving the drawing by up to {max(moves.values()):.3g} {unit} (the fit's bound "
+            f"includes it): {', '.join(list(moves)[:5])}{' ...' if len(moves) > 5 else ''}")
+
+
 def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float, exact=None) -> Resolved:
     from .fitting import fit_drawing
     from .to_figure import figure_from_fit
@@ -277,7 +302,8 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     tol_v = _tol(tol, unit, fsize, floor=MIN_REL_TOL)
     # In arc mode a path drawn closed but whose ends miss by less than the tolerance is closed
     # exactly; the fit then gets what is left of the tolerance, and its bound is to the drawing as given.
-    fitted, gaps = drawing.closed_within(tol_v) if exact is None or exact is False else (drawing, {})
+    arc_mode = exact is None or exact is False
+    fitted, gaps = drawing.closed_within(tol_v) if arc_mode else (drawing, {})
     fit_tol = tol_v - max(gaps.values(), default=0.0)
     if gaps:
         notes.append(f"closed {len(gaps)} path(s) whose ends were within {tol_v:.3g} {unit} of their starts "
@@ -286,21 +312,12 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     # A piece between two corners shorter than 2 ABSORB_SHARE times the tolerance is a section of its
     # own, too short to launch and stop on: absorbed into its neighbours (moving the drawing by half its
     # length), where the fit still succeeds in what is left of the tolerance; else fitted as it is.
-    absorbed, moves = (fitted.absorbed(2.0 * ABSORB_SHARE * fit_tol, EXACT_MAX_CORNER_DEG)
-                       if exact is None or exact is False else (fitted, {}))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        fit = None
+        fit, fitted, fit_tol, gaps, moves = _absorbed_fit(fitted, fit_tol, gaps, EXACT_MAX_CORNER_DEG, arc_mode,
+                                                          lambda d, t: fit_drawing(d, t, method=method))
         if moves:
-            fit = fit_drawing(absorbed, fit_tol - max(moves.values()), method=method)
-            if fit.success:
-                fitted = absorbed
-                gaps = {name: gaps.get(name, 0.0) + moves.get(name, 0.0) for name in {*gaps, *moves}}
-                fit_tol -= max(moves.values())
-                notes.append(f"absorbed the pieces between two corners shorter than {2.0 * ABSORB_SHARE:.3g} x the "
-                             f"tolerance into their neighbours, moving the drawing by up to {max(moves.values()):.3g} "
-                             f"{unit} (the fit's bound includes it): {', '.join(list(moves)[:5])}"
-                             f"{' ...' if len(moves) > 5 else ''}")
+            notes.append(_absorbed_note(moves, "corners", unit))
         if fit is None or not fit.success:
             fit = fit_drawing(fitted, fit_tol, method=method)
         if not fit.success:
@@ -316,26 +333,17 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
         # every join that could cost a tenth of the tolerance is made a corner (a rest) instead.
         # A tiny piece between two of these corners is then a section of its own, too short to
         # launch and stop on (0.43 mm in an icon at 6 m): absorbed as above, where the fit allows.
-        retry, absorbed_note = None, []
-        tiny, tiny_moves = (fitted.absorbed(2.0 * ABSORB_SHARE * fit_tol, tight)
-                            if exact is None or exact is False else (fitted, {}))
-        if tiny_moves:
-            retry = fit_drawing(tiny, fit_tol - max(tiny_moves.values()), method=method, corner_tol_deg=tight,
-                                soft_corners=False)
-            if retry.success:
-                fitted, fit_tol = tiny, fit_tol - max(tiny_moves.values())
-                gaps = {name: gaps.get(name, 0.0) + tiny_moves.get(name, 0.0) for name in {*gaps, *tiny_moves}}
-                absorbed_note.append(
-                    f"absorbed the pieces between two such corners shorter than {2.0 * ABSORB_SHARE:.3g} x the "
-                    f"tolerance into their neighbours, moving the drawing by up to {max(tiny_moves.values()):.3g} "
-                    f"{unit} (the fit's bound includes it): {', '.join(list(tiny_moves)[:5])}"
-                    f"{' ...' if len(tiny_moves) > 5 else ''}")
+        def sharp_fit(d, t):
+            return fit_drawing(d, t, method=method, corner_tol_deg=tight, soft_corners=False)
+
+        retry, fitted, fit_tol, gaps, tiny_moves = _absorbed_fit(fitted, fit_tol, gaps, tight, arc_mode, sharp_fit)
         if retry is None or not retry.success:
-            retry = fit_drawing(fitted, fit_tol, method=method, corner_tol_deg=tight, soft_corners=False)
+            retry = sharp_fit(fitted, fit_tol)
         if retry.success:
             notes.append(f"joins turning by more than {tight:.2g} degrees made corners (rests): kept smooth, "
                          f"they moved the rest of their curve by more than the tolerance ({fit.message})")
-            notes += absorbed_note
+            if tiny_moves:
+                notes.append(_absorbed_note(tiny_moves, "such corners", unit))
             fit, caught = retry, []  # the first attempt's complaints were answered
     for w in caught:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
@@ -345,7 +353,7 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     params = skater_params(body_mass, height) if unit == "m" else SleighParams()
     notes.append(f"arc mode: {fit.n_arcs} arcs and {fit.n_lines} lines within {fit.hausdorff:.3g} "
                  f"(certified; tolerance {tol_v:.3g} {unit})")
-    if exact is None or exact is False:
+    if arc_mode:
         fig = _merged(figure_from_fit(fit, name=drawing.name, params=params))
         return Resolved(figure=fig, kind="drawing", unit=unit, fit=fit, drawing=drawing, tol=tol_v,
                         notes=tuple(notes))
