@@ -44,6 +44,21 @@ def test_playback_matches_the_files(traced):
     assert load_playback(traced / "result.json").t.size == pb.t.size
 
 
+def test_controls_in_memory_give_the_playback_of_the_files(traced, tmp_path):
+    # the command line builds its viewer from the rows it has just written, without reading them back
+    from_files = load_playback(traced)
+    for name in ("result.json", "report.json"):
+        (tmp_path / name).write_text((traced / name).read_text())
+    columns = read_controls(traced / "controls.csv")
+    from_memory = load_playback(tmp_path, columns)  # this folder has no controls.csv
+    for field in ("t", "x", "y", "theta", "a", "b", "adot", "bdot", "mass_x", "mass_y", "speed", "omega",
+                  "ke_skate", "ke_mass", "section", "rests", "rest_times"):
+        np.testing.assert_array_equal(getattr(from_memory, field), getattr(from_files, field), err_msg=field)
+    assert from_memory.summary == from_files.summary
+    with pytest.raises(SkatetraceError, match="controls.csv not found"):
+        load_playback(tmp_path)
+
+
 def test_missing_or_broken_results_are_clear_errors(tmp_path, traced):
     with pytest.raises(SkatetraceError, match="result.json not found"):
         load_playback(tmp_path)

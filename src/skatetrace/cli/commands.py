@@ -405,8 +405,11 @@ def _trace(args) -> int:
         from ..outputs.playback import load_playback
         from ..outputs.viewer import write_viewer
 
-        # this run's result.json, where it is until the run's files are moved in together
-        write_viewer(load_playback(staged(out / "result.json")), out / "viewer.html")
+        # this run's result.json, where it is until the run's files are moved in together; the
+        # controls as just written to controls.csv (its floats round-trip), not read back
+        columns = {"t": schedule.t, "a": schedule.a, "b": schedule.b, "adot": schedule.adot, "bdot": schedule.bdot,
+                   **states}
+        write_viewer(load_playback(staged(out / "result.json"), columns), out / "viewer.html")
     elapsed = time.perf_counter() - t0
     unit = "m" if res.unit == "m" else "model units"
     print(f"figure {figure.name}: {len(figure.curves)} curve(s), {len(trace.sections)} section(s), "

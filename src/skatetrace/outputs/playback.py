@@ -116,15 +116,20 @@ def _read_json(path: Path, what: str) -> dict[str, Any]:
         raise SkatetraceError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
 
 
-def load_playback(source: str | Path) -> Playback:
+def load_playback(source: str | Path, columns: dict[str, np.ndarray] | None = None) -> Playback:
     """Read a traced figure from the output folder of ``skatetrace trace`` (or its ``result.json``).
+
+    ``columns``: the folder's controls already in memory, as
+    :func:`~skatetrace.outputs.results.read_controls` reads them (at least ``t``, ``x``, ``y``,
+    ``theta``, ``a``, ``b``, ``adot``, ``bdot``, ``xi1`` and ``xi2``); ``controls.csv`` is then not
+    read (:func:`~skatetrace.outputs.results.read_result_folder`).
 
     Raises
     ------
     SkatetraceError
         A missing or unreadable ``result.json`` or ``controls.csv``, or files that do not match.
     """
-    folder, result, cols = read_result_folder(source)
+    folder, result, cols = read_result_folder(source, columns)
     controls_path = folder / "controls.csv"
     if cols["t"].size < 2:
         raise SkatetraceError(f"{controls_path} holds fewer than two rows: nothing to play")
