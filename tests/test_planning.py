@@ -66,6 +66,34 @@ def test_a_planned_arc_is_verified_by_the_replay(arc):
     assert result.success, result.message
 
 
+def test_a_plan_is_sampled_coarsely_first_and_finely_where_its_replay_comes_close_to_a_limit(arc, monkeypatch):
+    from skatetrace.verification.verify import VerificationReport, schedule_from_trace
+
+    fig, trace = arc
+    coarse, _ = schedule_from_trace(trace, fine=False)
+    fine, _ = schedule_from_trace(trace)
+    assert 3 * coarse.t.size < fine.t.size
+    kept = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
+    assert kept.success and kept.report.passed_within(0.5), kept.message
+    assert kept.schedule.t.size == coarse.t.size
+    # a replay that passes, but by less than half a limit: sampled finely, verified again
+    monkeypatch.setattr(VerificationReport, "passed_within", lambda self, share: False)
+    again = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
+    assert again.success and again.schedule.t.size == fine.t.size
+
+
+def test_passed_within_compares_every_measure_with_its_share_of_the_limit(arc):
+    fig, _trace = arc
+    report = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0)).report
+    assert report.success
+    tol = report.tolerance
+    assert dataclasses.replace(report, max_deviation=0.6 * tol).passed_within(0.7)
+    assert not dataclasses.replace(report, max_deviation=0.6 * tol).passed_within(0.5)
+    sec = dict(report.sections[0], end_speed=0.6 * report.sections[0]["cusp_speed_limit"])
+    assert not dataclasses.replace(report, sections=[sec, *report.sections[1:]]).passed_within(0.5)
+    assert not dataclasses.replace(report, success=False).passed_within(1.0)
+
+
 def _cusp_figure(join: dict, second: dict) -> dict:
     return {"schema": "skatetrace.figure/1", "name": "two arcs", "params": {"M": 2, "m": 1, "I": 3},
             "curves": [{"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 150}, second], "joins": [join]}]}

@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import math
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, Callable
 
 import numpy as np
@@ -68,11 +69,12 @@ def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractCon
     return _PROGRESS.listening(report)
 
 
-def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+def _sample_section(sec, fine: bool = True) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Sample times of one traced section and its controls and momenta there (no layout).
 
     Both one-sided limits are sampled at every breakpoint: an interval's last row is the limit
-    from the left, the next interval's first row the limit from the right.
+    from the left, the next interval's first row the limit from the right. A planned section is
+    sampled more finely unless ``fine`` is False (:func:`schedule_from_trace`).
     """
     def fn(tt, left):
         v = sec.evaluate(tt, geometry=False)
@@ -84,15 +86,20 @@ def _sample_section(sec) -> tuple[np.ndarray, dict[str, np.ndarray]]:
 
     # A planned section moves the mass fast through its rests, where the replay's momenta must
     # cancel the mass's rates: its rates are sampled a thousand times more finely.
-    tol = dict(value_tol=1e-14, rate_tol=1e-12) if sec.glide.get("planned") else {}
+    tol = dict(value_tol=1e-14, rate_tol=1e-12) if fine and sec.glide.get("planned") else {}
     spans, rows = sample_intervals(fn, sec.breakpoints(), values=True, **tol)
     v = dict(zip(_SAMPLED, rows))
     v["segment"] = v["segment"].astype(int)
     return np.concatenate(spans), v
 
 
-def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
+def schedule_from_trace(trace: FigureTrace, *, fine: bool = True) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
     """Sample every section's controls densely enough for cubic Hermite interpolation.
+
+    Planned sections (:mod:`skatetrace.planning`) are sampled a thousand times more finely than
+    the others (values to 1e-14 of their largest, rates to 1e-12), unless ``fine`` is False: the
+    mass moves fast through their rests, where the replay's momenta must cancel its rates.
+    :func:`~skatetrace.pipeline.trace_and_verify` tries them at the others' tolerances first.
 
     Returns the schedule and the matching solver states (``x, y, theta, p1, p2, xi1, xi2``) at the
     same rows, for ``controls.csv``.
@@ -110,7 +117,7 @@ def schedule_from_trace(trace: FigureTrace) -> tuple[ControlSchedule, dict[str, 
     step = _SAMPLE_ROUND if len(firsts) >= _FORK_SECTIONS else 1
     sampled: dict[tuple[int, int], tuple[np.ndarray, dict[str, np.ndarray]]] = {}
     for k in range(0, len(firsts), step):
-        sampled.update(zip(keys[k:k + step], map_forked(_sample_section, firsts[k:k + step])))
+        sampled.update(zip(keys[k:k + step], map_forked(partial(_sample_section, fine=fine), firsts[k:k + step])))
         _PROGRESS.report("sampling the controls", min(k + step, len(firsts)), len(firsts))
     for si, (sec, t_start) in enumerate(zip(trace.sections, trace.start_times)):
         if not sec.phases:
@@ -242,6 +249,13 @@ class VerificationReport:
     sections: list[dict[str, Any]]
     invariant_drift: list[dict[str, Any]]
     replay: Replay | None = field(default=None, repr=False, compare=False)
+
+    def passed_within(self, share: float) -> bool:
+        """Whether every check passed with the deviation within ``share`` of the tolerance and every
+        cusp speed within ``share`` of its section's limit."""
+        return self.success and self.max_deviation <= share * self.tolerance and all(
+            max(rec["start_speed"], rec["end_speed"]) <= share * rec["cusp_speed_limit"]
+            for rec in self.sections if rec.get("traced"))
 
     def to_dict(self) -> dict[str, Any]:
         return {
