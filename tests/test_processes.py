@@ -88,3 +88,52 @@ def test_a_child_runs_its_own_side_by_side_work_itself():
     assert here == parent and child != parent  # item 1 ran in the child, not again here
     assert inner_child == [child, child]
     assert inner_here[0] == parent and inner_here[1] not in (parent, child)
+
+
+def test_evaluated_ahead_yields_every_item_in_order_and_skips_the_unwanted(forking):
+    parent = os.getpid()
+    calls = []
+
+    def fn(x):
+        calls.append(x)  # in this process only: a child's list is its own
+        return 10 * x, os.getpid() == parent
+
+    out = list(processes.evaluated_ahead(fn, range(12), lambda x: x % 3 != 0, alone_for=0.0, batch=2, workers=2))
+    assert [item for item, _ in out] == list(range(12))
+    assert [r and r[0] for _, r in out] == [None if x % 3 == 0 else 10 * x for x in range(12)]
+    assert 0 not in calls and 3 not in calls  # fn never sees an unwanted item
+    # the first item alone here, then batches of two per process: some answers came from a child
+    assert out[1][1][1] and not all(r[1] for _, r in out if r)
+
+
+def test_evaluated_ahead_asks_wanted_when_it_makes_a_batch(forking):
+    # a search that has its answer turns the later items away: a batch made after that skips them
+    found = []
+
+    def wanted(x):
+        return not found
+
+    seen = []
+    for item, result in processes.evaluated_ahead(lambda x: x, range(20), wanted, alone_for=0.0, batch=2,
+                                                  workers=2):
+        seen.append((item, result))
+        if item == 5:
+            found.append(item)
+    # item 0 alone, then batches of 2 x 2 workers: 1..4, 5..8 (made before 5 was seen), 9..12, ...
+    assert [r for _, r in seen[:9]] == list(range(9))
+    assert all(r is None for i, r in seen if i >= 9)
+
+
+def test_evaluated_ahead_alone_or_in_a_child_runs_everything_here(forking):
+    parent = os.getpid()
+    out = list(processes.evaluated_ahead(lambda x: os.getpid(), range(6), lambda x: True, alone_for=60.0))
+    assert all(pid == parent for _, pid in out)  # all within the time alone
+
+    def in_child(_):
+        here = os.getpid()
+        pids = [pid for _, pid in processes.evaluated_ahead(lambda x: os.getpid(), range(6), lambda x: True,
+                                                            alone_for=0.0, batch=1, workers=2)]
+        return here, pids
+
+    (_, _), (child, pids) = processes.map_forked(in_child, [0, 1], workers=2)
+    assert pids == [child] * 6  # a worker forks nothing more: its siblings already fill the cores

@@ -288,6 +288,39 @@ def test_pruned_search_and_mirrored_launches_choose_as_the_full_search(seg, monk
     assert fast.nfev < full.nfev
 
 
+def test_a_placement_search_in_batches_side_by_side_chooses_as_one_after_another(monkeypatch):
+    # every placement of a long search solved in forked batches from the first on: the same choice,
+    # the same integrations counted, as one after another
+    import functools
+
+    from skatetrace import processes
+    from skatetrace.tracing import sections as tracing
+
+    if not processes.can_fork() or processes.available_workers() < 2:
+        pytest.skip("this test process may not fork, or has one core")
+    fig = Figure("s", (Curve((Segment(1 / 1.5, 2.0), Segment(0.0, 1.0), Segment(-1 / 2.5, 2.5)),
+                             (Join("smooth"), Join("smooth")), name="s"),))
+    sec = fig.curves[0].sections()[0]
+    here = tracing.trace_section(P, sec, TraceOptions(workers=1))
+    made, real = [], processes.map_forked
+
+    def forked(fn, items, workers=None):
+        made.append(len(items))
+        return real(fn, items, workers)
+
+    monkeypatch.setattr(processes, "map_forked", forked)
+    monkeypatch.setattr(tracing, "evaluated_ahead", functools.partial(processes.evaluated_ahead, alone_for=0.0,
+                                                                      batch=2))
+    batched = tracing.trace_section(P, sec, TraceOptions(workers=2))
+    assert made and max(made) > 1  # batches were shared out
+    assert here.success and batched.success
+    assert (batched.glide, batched.metrics, batched.residuals, batched.nfev) == (here.glide, here.metrics,
+                                                                                 here.residuals, here.nfev)
+    t = np.linspace(0.0, here.duration, 101)
+    for key in ("a", "b", "xi2"):
+        np.testing.assert_array_equal(batched.evaluate(t, geometry=False)[key], here.evaluate(t, geometry=False)[key])
+
+
 def test_placement_keys_within_rounding_are_a_tie_kept_by_the_first():
     from skatetrace.tracing.sections import _improves
 

@@ -24,10 +24,12 @@ import signal
 import threading
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from typing import Callable, Iterator, Sequence, TypeVar
+import itertools
+import time
+from typing import Callable, Iterable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "can_fork", "map_forked", "quiet_on_interrupt",
-           "recording_interrupts", "run_jobs", "worker_count"]
+__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "can_fork", "evaluated_ahead", "map_forked",
+           "quiet_on_interrupt", "recording_interrupts", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
 #: hundred MB, so a many-core machine is not filled with them by default.
@@ -192,3 +194,37 @@ def map_forked(fn: Callable[[J], R], items: Sequence[J], workers: int | None = N
             if child.is_alive():  # an interrupt here (or an error) while the child still draws
                 child.terminate()
                 child.join()
+
+
+def evaluated_ahead(fn: Callable[[J], R], items: Iterable[J], wanted: Callable[[J], bool], *,
+                    alone_for: float = 0.2, batch: int = 8, workers: int | None = None) -> Iterator[tuple[J, R | None]]:
+    """``(item, fn(item))`` for each item in order, lazily: a search that stops at its answer, sped up when it runs long.
+
+    ``fn`` is called only on the items ``wanted`` accepts (the others are yielded with None).
+    Items are evaluated here, one at a time as the caller asks for them, for ``alone_for``
+    seconds; after that, in batches of ``batch`` per process (:func:`worker_count`), shared out by
+    :func:`map_forked` among this process and forked children. A batch may evaluate items the
+    caller never asks for (it stopped in the middle): that costs time, never a different answer,
+    since every item is evaluated by ``fn`` alike either way. ``wanted`` is asked when a batch is
+    made, so it must only ever turn more items away as the search goes on. Only the main process
+    forks: in a worker of a pool (which has a sibling per core) everything runs here.
+    """
+    items = iter(items)
+    started = time.perf_counter()
+    for item in items:
+        yield item, (fn(item) if wanted(item) else None)
+        if time.perf_counter() - started > alone_for:
+            break
+    else:
+        return
+    count = worker_count(DEFAULT_MAX_WORKERS, workers)
+    forks = count > 1 and multiprocessing.parent_process() is None
+    while True:
+        chunk = list(itertools.islice(items, batch * count if forks else 1))
+        if not chunk:
+            return
+        keep = [wanted(item) for item in chunk]
+        todo = [item for item, k in zip(chunk, keep) if k]
+        results = iter(map_forked(fn, todo, count) if forks else [fn(item) for item in todo])
+        for item, k in zip(chunk, keep):
+            yield item, (next(results) if k else None)

@@ -31,8 +31,9 @@ import numpy as np
 
 from ..dynamics.model import SleighParams, mass_energy, velocities
 from ..figures.figure import Figure, Section
-from ..figures.geometry import shifted_polynomial, travel
-from ..processes import run_jobs
+from ..figures.geometry import travel
+from ..processes import evaluated_ahead, run_jobs
+from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
@@ -412,93 +413,13 @@ class SectionTrace:
         }
 
 
-def _auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> float:
-    cap = 1.0 / abs(kappa) if kappa != 0.0 else params.length_scale
-    return min(0.5 * length, cap)
-
-
-def _line_apex(params: SleighParams, ell: float) -> float:
-    """Fore-aft mass position ``a`` for an apex on the blade's axis before a launch over ``ell``.
-
-    Such a launch moves the mass back by about ``(M + m) ell / m``, which must not reach ``a = 0``
-    (the singular point of a line), so the apex sits twice that far ahead plus one model length.
-    """
-    return 2.0 * (params.M + params.m) / params.m * ell + params.length_scale
-
-
-def _glide_candidates(params: SleighParams, segs, g: int, ell: float,
-                      options: TraceOptions) -> list[tuple[tuple[float, float], bool]]:
-    """Mass positions ``((a, b), steady)`` to try at the apex on segment ``g``, most natural first.
-
-    ``steady`` apexes are glides: the mass locked at ``(0, b)`` on an arc or anywhere on a line
-    keeps the sleigh on the curve at constant speed, so a long segment simply glides longer. At a
-    smooth join from curvature k1 to k2 the control rates jump by ``D (k1 - k2) xi2 / |c|`` along
-    ``c``; with the mass at ``(0, b)`` the jump moves the mass backwards (speeding the sleigh up)
-    iff ``b - b*`` has the sign of ``k1 - k2``, where ``b* = -k2 I / M`` is the singular point of
-    the new curvature, so those positions are tried next. Last, on a gently curved arc, where a
-    stop driven from ``a = 0`` needs lateral excursions of about ``2 / |k|``, the line's apex
-    ``(a, 0)`` is tried as an instant (not a glide): the launch runs straight into the stop.
-
-    A spiral (varying curvature) has no glide: every apex on it is an instant at its middle, at
-    ``(0, b)`` for ``b = 0`` and on both sides of the singular point ``b* = -k I / M`` of the
-    curvature ``k`` there, then at the line's apex.
-    """
-    seg = segs[g]
-    scale = params.length_scale
-    if not seg.constant:
-        kg = float(seg.curvature_at(0.5 * seg.length))
-        bstar = -kg * params.I / params.M
-        out = [0.0] + [bstar + d * scale for d in (1.0, -1.0, 2.5, -2.5)]
-        steady = False
-    else:
-        kg = seg.coefficients[0]
-        base = _line_apex(params, ell)
-        if kg == 0.0:
-            return [((base, 0.0), True), ((2.0 * base, 0.0), True), ((4.0 * base, 0.0), True)]
-        if options.glide_lateral is not None:
-            return [((0.0, options.glide_lateral), True)]
-        out = [0.0]
-        # the curvature on the other side of the nearest join that changes it
-        after = next((s.coefficients[0] for s in segs[g + 1:] if s.coefficients[0] != kg), None)
-        before = next((float(s.curvature_at(s.length)) for s in reversed(segs[:g])
-                       if float(s.curvature_at(s.length)) != kg), None)
-        for k2 in (after, before):
-            if k2 is None:
-                continue
-            bstar = -k2 * params.I / params.M
-            sgn = math.copysign(1.0, kg - k2)
-            out += [bstar + sgn * d * scale for d in (1.0, 1.5, 2.5)]
-        steady = True
-    seen: list[float] = []
-    for b in out:
-        if all(abs(b - c) > 1e-12 for c in seen):
-            seen.append(b)
-    instant = _line_apex(params, 0.5 * seg.length)
-    return [((0.0, b), steady) for b in seen] + [((instant, 0.0), False), ((2.0 * instant, 0.0), False)]
-
-
-def _legs_from_apex(segs, g: int, ell_g: float) -> tuple[list, list]:
-    """Legs ``[(coefficients, length), ...]`` of the launch and the stop from an apex on segment ``g``.
-
-    The launch's legs run backwards along the curve from ``ell_g`` into segment ``g`` (a curvature
-    polynomial of the distance back from the apex), the stop's forwards from ``ell_g`` before its end.
-    """
-    seg = segs[g]
-    L = seg.length
-    before = [(shifted_polynomial(seg.coefficients, ell_g, -1.0), ell_g)]
-    before += [(shifted_polynomial(s.coefficients, s.length, -1.0), s.length) for s in reversed(segs[:g])]
-    after = [(shifted_polynomial(seg.coefficients, L - ell_g, 1.0), ell_g)]
-    after += [(s.coefficients, s.length) for s in segs[g + 1:]]
-    return before, after
-
-
 def trace_section(
     params: SleighParams, section: Section, options: TraceOptions = TraceOptions(), curve_index: int = 0
 ) -> SectionTrace:
     """Find controls that trace ``section`` exactly from rest to rest.
 
     The glide is placed on each segment in turn (longest first) and at each candidate mass
-    position (:func:`_glide_candidates`), until ``options.max_placements`` have been tried without
+    position (:func:`glide_candidates`), until ``options.max_placements`` have been tried without
     success. Of the placements whose stop and launch are both found
     and pass every check (the first that works and up to ``options.search`` tried after it), the
     one whose mass stays closest to the blade is kept (least largest ``|a|, |b|``, then least peak
@@ -523,13 +444,35 @@ def trace_section(
         for g in order:
             Lg = segs[g].length
             kg = float(segs[g].curvature_at(0.5 * Lg))
-            ell = min(options.maneuver_length or _auto_maneuver_length(params, kg, Lg), 0.5 * Lg)
-            for glide_ab, steady in _glide_candidates(params, segs, g, ell, options):
+            ell = min(options.maneuver_length or auto_maneuver_length(params, kg, Lg), 0.5 * Lg)
+            for glide_ab, steady in glide_candidates(params, segs, g, ell, options):
                 yield g, kg, Lg, ell, glide_ab, steady
+
+    def solved(placement) -> tuple[SectionTrace, int]:
+        """The section traced with the glide at ``placement``, and the integrations that took."""
+        g, kg, Lg, ell, glide_ab, steady = placement
+        # an instant apex is no glide: the launch and the stop share the whole segment
+        ell_g = ell if steady else 0.5 * Lg
+        before, after = legs_from_apex(segs, g, ell_g)
+        glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
+                 "kappa": kg, "speed": options.speed}
+        stop, launch = _maneuvers(params, before, after, glide_ab, kw)
+        used = stop.nfev + (launch.nfev if launch else 0)
+        return _assemble(params, section, options, curve_index, glide, before, stop, launch, used), used
 
     nfev = attempts = extra = 0
     first_failure = best = None
-    for g, kg, Lg, ell, glide_ab, steady in placements():
+
+    def wanted(placement) -> bool:
+        """Whether the search below would solve ``placement`` if it came next (it only ever wants fewer)."""
+        if best is None:
+            return attempts < options.max_placements
+        return extra < options.search and not _cannot_win(placement[4], best[0])
+
+    # The placements are solved in order; a long search (a section of a hundred pieces may try a
+    # hundred placements before one works) goes on in batches side by side, the same answers.
+    for (g, kg, Lg, ell, glide_ab, steady), done in evaluated_ahead(solved, placements(), wanted,
+                                                                    workers=options.workers):
         if best is None and attempts >= options.max_placements:
             break
         if best is not None:
@@ -538,19 +481,13 @@ def trace_section(
             extra += 1
             if _cannot_win(glide_ab, best[0]):
                 continue  # counted as tried: the same placements are searched as without the shortcut
-        # an instant apex is no glide: the launch and the stop share the whole segment
-        ell_g = ell if steady else 0.5 * Lg
-        before, after = _legs_from_apex(segs, g, ell_g)
-        glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
-                 "kappa": kg, "speed": options.speed}
-        stop, launch = _maneuvers(params, before, after, glide_ab, kw)
-        nfev += stop.nfev + (launch.nfev if launch else 0)
+        attempt, used = done
+        nfev += used
         attempts += 1
-        attempt = _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev)
         if not attempt.success:
             first_failure = first_failure or attempt
         elif options.placement == "first":
-            return attempt
+            return replace(attempt, nfev=nfev)
         else:
             key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
             if best is None or _improves(key, best[0]):
