@@ -207,3 +207,13 @@ def test_bench_corpus_traces_as_the_command_line_does_by_default(capsys):
     rows = _load("bench_corpus").main(["bootstrap-dice-1.svg", "--reach", "auto"])
     assert rows[0]["outcome"] == "verified" and rows[0]["reason"] == ""  # planned, no fallback needed
     assert rows[0]["verdict"].startswith("verified · ")
+
+
+def test_bench_corpus_runs_each_file_on_the_command_line_too(capsys):
+    rows = _load("bench_corpus").main(["resvg-display-none-bbox-impact.svg", "--cli", "--markdown"])
+    row = rows[0]
+    assert row["outcome"] == "verified" and row["cli_exit"] == 0 and row["cli_s"] > 0.0
+    assert 0 < row["segments"] <= 50  # the segments the drawing is read as
+    out = capsys.readouterr().out
+    assert "command line, drawings of at most 50 segments: within 10 s" in out
+    assert "| segments | command line s |" in out
