@@ -86,7 +86,7 @@ def summary(rows: list[dict]) -> str:
 
 def cli_summary(rows: list[dict]) -> str:
     """The drawings of at most 50 segments run on the command line within 10 s, and the slowest."""
-    small = [r for r in rows if "cli_s" in r and 0 < r["segments"] <= 50]
+    small = [r for r in rows if "cli_s" in r and 0 < r.get("segments", 0) <= 50]  # (a refused file has none)
     fast = sum(r["cli_s"] <= 10.0 for r in small)
     slow = sorted(small, key=lambda r: -r["cli_s"])[:5]
     return (f"command line, drawings of at most 50 segments: within 10 s {fast} of {len(small)}; slowest: "
@@ -121,8 +121,9 @@ def main(argv=None) -> list[dict]:
         if args.cli:
             row["cli_s"], row["cli_exit"] = command_line(name)
         rows.append(row)
+        cli = f" command line {row['cli_s']:5.1f} s ({row.get('segments', 0)} segments)" if args.cli else ""
         print(f"{name:46s} {row['outcome']:13s} {row['sections']:4d} fit {row['fit_s']:5.1f} s "
-              f"trace {row['trace_s']:6.1f} s {row['reason'][:70]}", flush=True)
+              f"trace {row['trace_s']:6.1f} s{cli} {row['reason'][:70]}", flush=True)
     print(summary(rows))
     if args.cli:
         print(cli_summary(rows))

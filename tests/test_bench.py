@@ -210,8 +210,10 @@ def test_bench_corpus_traces_as_the_command_line_does_by_default(capsys):
 
 
 def test_bench_corpus_runs_each_file_on_the_command_line_too(capsys):
-    rows = _load("bench_corpus").main(["resvg-display-none-bbox-impact.svg", "--cli", "--markdown"])
+    rows = _load("bench_corpus").main(["resvg-display-none-bbox-impact.svg", "camr-rhodonea.svg", "--cli",
+                                       "--markdown"])
     row = rows[0]
+    assert rows[1]["outcome"] == "refused" and rows[1]["cli_exit"] == 2  # refused on the command line too
     assert row["outcome"] == "verified" and row["cli_exit"] == 0 and row["cli_s"] > 0.0
     assert 0 < row["segments"] <= 50  # the segments the drawing is read as
     out = capsys.readouterr().out
