@@ -18,14 +18,14 @@ answer are run here. Every job runs the same code either way, so the answers do 
 from __future__ import annotations
 
 import contextlib
+import itertools
 import multiprocessing
 import os
 import signal
 import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-import itertools
-import time
 from typing import Callable, Iterable, Iterator, Sequence, TypeVar
 
 __all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "can_fork", "evaluated_ahead", "map_forked",

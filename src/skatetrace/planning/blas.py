@@ -6,8 +6,8 @@ says otherwise. MUMPS calls it on small dense fronts, where a second thread only
 planner already solves its independent programs in one process per core
 (:mod:`skatetrace.planning.pool`), so two threads each oversubscribe the machine. Measured on this
 project's 2-core machine (2026-11-27, the 24 planned corpus drawings and 17 school figures under
-the command line's default reach, one sitting): 232 s with the library's default of two threads,
-212 s with one; heroicons-paper-airplane's linked program 8.5 s against 6.6 s.
+the command line's default reach, one sitting each): 232 s with the library's default of two
+threads, 208 s with one; heroicons-paper-airplane 13.8 s against 9.9 s.
 
 The thread count also changes the round-off of the factorisations, and IPOPT's path with it:
 svgpathtools-negative-scale took 202 iterations in its programs with two threads and 292 with one.

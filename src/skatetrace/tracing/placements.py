@@ -36,7 +36,7 @@ def line_apex(params: SleighParams, ell: float) -> float:
 
 
 def glide_candidates(params: SleighParams, segs, g: int, ell: float,
-                      options: TraceOptions) -> list[tuple[tuple[float, float], bool]]:
+                     options: TraceOptions) -> list[tuple[tuple[float, float], bool]]:
     """Mass positions ``((a, b), steady)`` to try at the apex on segment ``g``, most natural first.
 
     ``steady`` apexes are glides: the mass locked at ``(0, b)`` on an arc or anywhere on a line

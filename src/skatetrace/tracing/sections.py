@@ -33,8 +33,8 @@ from ..dynamics.model import SleighParams, mass_energy, velocities
 from ..figures.figure import Figure, Section
 from ..figures.geometry import travel
 from ..processes import evaluated_ahead, run_jobs
-from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
+from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
 
@@ -471,15 +471,14 @@ def trace_section(
 
     # The placements are solved in order; a long search (a section of a hundred pieces may try a
     # hundred placements before one works) goes on in batches side by side, the same answers.
-    for (g, kg, Lg, ell, glide_ab, steady), done in evaluated_ahead(solved, placements(), wanted,
-                                                                    workers=options.workers):
+    for placement, done in evaluated_ahead(solved, placements(), wanted, workers=options.workers):
         if best is None and attempts >= options.max_placements:
             break
         if best is not None:
             if extra >= options.search:
                 break
             extra += 1
-            if _cannot_win(glide_ab, best[0]):
+            if _cannot_win(placement[4], best[0]):
                 continue  # counted as tried: the same placements are searched as without the shortcut
         attempt, used = done
         nfev += used
