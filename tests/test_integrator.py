@@ -348,3 +348,11 @@ def test_dense_evaluation_is_scipys_formula_bit_for_bit():
     ref += sol.y_old[i]
     assert np.array_equal(sol(t), ref.T)
     assert np.array_equal(sol(t[17]), ref[17])
+
+
+def test_load_leaves_the_integrator_compiled():
+    """``load`` makes the machine code ready (compiled, or read from numba's cache) before any figure's work."""
+    from skatetrace.dynamics import integrator
+
+    integrator.load()
+    assert integrator._run.signatures and integrator._evaluate_steps.signatures

@@ -359,6 +359,48 @@ def test_sections_traced_in_worker_processes_are_the_ones_traced_here(monkeypatc
     assert pooled.sections[4].glide == pooled.sections[0].glide
 
 
+@pytest.mark.parametrize("slow", ["first section", "loading the integrator"])
+def test_after_a_long_first_section_the_others_go_to_the_pool(monkeypatch, slow):
+    """The pool's threshold counts the sections' own time: a first section that takes longer sends
+    every other section to the pool (not the next one here too, as when its time was taken for
+    the integrator's loading); loading the integrator, however long, does not count."""
+    import time
+
+    from skatetrace.tracing import sections
+
+    segs = [Segment(1.0 / r, 1.0 + 0.3 * i) for i, r in enumerate((1.5, 2.0, -2.5, 3.0))]
+    fig = Figure("four", (Curve(tuple(segs), tuple(Join("cusp") for _ in segs[1:]), name="four"),))
+    pooled, here = [], []
+    real_job, real_load = sections._trace_job, sections.load_integrator
+
+    def job(j):
+        if not here and slow == "first section":
+            time.sleep(0.3)
+        here.append(j[1])
+        return real_job(j)
+
+    def load():
+        if slow == "loading the integrator":
+            time.sleep(0.3)
+        real_load()
+
+    def run_jobs(fn, jobs, workers):
+        pooled.extend(j[1] for j in jobs)
+        return (real_job(j) for j in jobs)
+
+    monkeypatch.setattr(sections, "_POOL_WORTH", 0.2)
+    monkeypatch.setattr(sections, "_trace_job", job)
+    monkeypatch.setattr(sections, "load_integrator", load)
+    monkeypatch.setattr(sections, "run_jobs", run_jobs)
+    tr = trace_figure(fig, P, TraceOptions(workers=2))
+    assert tr.success
+    sections_in_order = [s.section for s in tr.sections]
+    if slow == "first section":
+        assert here == sections_in_order[:1] and pooled == sections_in_order[1:]
+    else:
+        assert here == sections_in_order and pooled == []
+
+
 def test_a_small_figure_never_starts_a_pool(monkeypatch):
     from skatetrace import processes
 

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ..dynamics.integrator import load as load_integrator
 from ..dynamics.model import SleighParams, mass_energy, velocities
 from ..figures.figure import Figure, Section
 from ..figures.geometry import travel
@@ -719,18 +720,19 @@ def _trace_job(job) -> SectionTrace:
 def _solve_sections(jobs: list, workers: int | None):
     """The traces of ``jobs`` (``trace_section``'s arguments), yielded in order as each is known.
 
-    The first is traced here (it also loads or compiles the integrator, which forked workers then
-    share, so its time says nothing of the others'); then the next ones until they have taken
+    The integrator is loaded (or compiled) here first, so that forked workers share it and the
+    time below is the sections' own. Sections are then traced here until they have taken
     ``_POOL_WORTH`` seconds (a figure of a few distinct sections is done by then), and the rest
-    side by side in worker processes (:func:`skatetrace.processes.run_jobs`). Each section is
-    traced by the same code either way: the traces do not depend on ``workers``.
+    side by side in worker processes (:func:`skatetrace.processes.run_jobs`): after a first
+    section that took longer, all the others. Each section is traced by the same code either way:
+    the traces do not depend on ``workers``.
     """
     if not jobs:
         return
-    yield _trace_job(jobs[0])
+    load_integrator()
     started = time.perf_counter()
-    here = 1
-    while here < len(jobs) and time.perf_counter() - started <= _POOL_WORTH:
+    here = 0
+    while here < len(jobs) and (here == 0 or time.perf_counter() - started <= _POOL_WORTH):
         yield _trace_job(jobs[here])
         here += 1
     yield from run_jobs(_trace_job, jobs[here:], workers)
