@@ -137,3 +137,55 @@ def test_evaluated_ahead_alone_or_in_a_child_runs_everything_here(forking):
 
     (_, _), (child, pids) = processes.map_forked(in_child, [0, 1], workers=2)
     assert pids == [child] * 6  # a worker forks nothing more: its siblings already fill the cores
+
+
+def test_background_answers_from_a_child_while_this_process_goes_on(forking):
+    import time
+
+    parent = os.getpid()
+    with processes.Background(lambda: (os.getpid(), [1.5] * 3)) as job:
+        started = time.perf_counter()  # the child computes while this process does something else
+        here = sum(range(1000))
+        assert time.perf_counter() - started < 1.0 and here == 499500
+        pid, value = job.result()
+    assert pid != parent and value == [1.5] * 3
+
+
+@pytest.mark.parametrize("how", ["dies", "fails"])
+def test_background_whose_child_dies_or_fails_is_computed_here(forking, how):
+    parent = os.getpid()
+
+    def work():
+        if os.getpid() != parent:
+            if how == "dies":
+                os._exit(3)
+            raise RuntimeError("only in the child")
+        return "here"
+
+    with processes.Background(work) as job:
+        assert job.result() == "here"
+
+    def always_fails():
+        raise ValueError("a bad input")
+
+    with processes.Background(always_fails) as job, pytest.raises(ValueError, match="a bad input"):
+        job.result()  # raised here, as without a child
+
+
+def test_background_without_fork_computes_on_demand_here(monkeypatch):
+    monkeypatch.setattr(processes, "can_fork", lambda: False)
+    calls = []
+    with processes.Background(lambda: calls.append(os.getpid()) or "done") as job:
+        assert calls == []  # nothing is computed until asked for
+        assert job.result() == "done"
+    assert calls == [os.getpid()]
+
+
+def test_leaving_the_block_ends_a_child_still_at_work(forking):
+    import time
+
+    with pytest.raises(KeyboardInterrupt):
+        with processes.Background(lambda: time.sleep(60)) as job:
+            child = job._child[0]
+            raise KeyboardInterrupt
+    assert not child.is_alive() and child.exitcode is not None

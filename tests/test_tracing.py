@@ -401,6 +401,36 @@ def test_after_a_long_first_section_the_others_go_to_the_pool(monkeypatch, slow)
         assert here == sections_in_order and pooled == []
 
 
+@pytest.mark.parametrize("pieces, here, pooled", [
+    ((1, 5, 1, 9, 3), [], [3, 1, 4, 0, 2]),  # several of many pieces: the pool, most pieces first
+    ((1, 20, 1, 9, 3), [1], [3, 4, 0, 2]),  # one of more than all the others: here, first
+    ((1, 1, 4, 1), [0, 1, 2, 3], []),  # one of several pieces: here, while they take little time
+])
+def test_sections_of_many_pieces_go_to_the_pool_longest_first(monkeypatch, pieces, here, pooled):
+    """A section of several pieces takes 0.03 to 8 s, one of one piece milliseconds: where two or
+    more have several, the longest-looking start first (in the pool, or here if it outweighs
+    all the others), and the traces still come back in skating order."""
+    from types import SimpleNamespace
+
+    from skatetrace.tracing import sections
+
+    ran_here, ran_pooled = [], []
+
+    def job(j):
+        ran_here.append(j[3])
+        return f"trace {j[3]}"
+
+    def run_jobs(fn, jobs, workers):
+        ran_pooled.extend(j[3] for j in jobs)
+        return (f"trace {j[3]}" for j in jobs)
+
+    monkeypatch.setattr(sections, "_trace_job", job)
+    monkeypatch.setattr(sections, "run_jobs", run_jobs)
+    jobs = [(P, SimpleNamespace(pieces=(None,) * n), None, k) for k, n in enumerate(pieces)]
+    assert list(sections._solve_sections(jobs, 2)) == [f"trace {k}" for k in range(len(pieces))]
+    assert ran_here == here and ran_pooled == pooled
+
+
 def test_a_small_figure_never_starts_a_pool(monkeypatch):
     from skatetrace import processes
 

@@ -26,9 +26,9 @@ import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from typing import Callable, Iterable, Iterator, Sequence, TypeVar
+from typing import Callable, Generic, Iterable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "available_workers", "can_fork", "evaluated_ahead", "map_forked",
+__all__ = ["DEFAULT_MAX_WORKERS", "Background", "available_workers", "can_fork", "evaluated_ahead", "map_forked",
            "quiet_on_interrupt", "recording_interrupts", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
@@ -194,6 +194,62 @@ def map_forked(fn: Callable[[J], R], items: Sequence[J], workers: int | None = N
             if child.is_alive():  # an interrupt here (or an error) while the child still draws
                 child.terminate()
                 child.join()
+
+
+def _called(fn: Callable[[], R]) -> R:
+    return fn()
+
+
+class Background(Generic[R]):
+    """``fn()`` computed in a forked child while this process goes on with other work.
+
+    Use it as a context manager; :meth:`result` waits for the answer (it comes back pickled).
+    Where forking is not safe (:func:`can_fork`), or the child fails or dies, :meth:`result`
+    calls ``fn()`` here instead, so an error is raised here, as without a child. Leaving the
+    ``with`` block (an error, an interrupt) ends a child still at work.
+
+    For work whose inputs are known early and whose answer is wanted late, beside work that
+    leaves a core idle part of the time: the command line draws fit.png while the figure is traced.
+    """
+
+    def __init__(self, fn: Callable[[], R]):
+        self._fn = fn
+        self._child = None
+        if can_fork():
+            context = multiprocessing.get_context("fork")
+            receive, send = context.Pipe(duplex=False)
+            child = context.Process(target=_forked_part, args=(_called, [fn], send), daemon=True)
+            child.start()
+            send.close()
+            self._child = (child, receive)
+
+    def result(self) -> R:
+        """``fn()``: the child's answer, else computed here."""
+        if self._child is not None:
+            child, receive = self._child
+            self._child = None
+            try:
+                part = receive.recv()
+            except EOFError:  # the child died before it could answer
+                part = None
+            finally:
+                receive.close()
+            child.join()
+            if part is not None and child.exitcode == 0:
+                return part[0]
+        return self._fn()
+
+    def __enter__(self) -> "Background[R]":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._child is not None:
+            child, receive = self._child
+            self._child = None
+            receive.close()
+            if child.is_alive():
+                child.terminate()
+            child.join()
 
 
 def evaluated_ahead(fn: Callable[[J], R], items: Iterable[J], wanted: Callable[[J], bool], *,
