@@ -706,3 +706,30 @@ def test_long_work_is_redrawn_at_most_ten_times_a_second_and_at_its_end(capsys, 
     # the first after a second, then every 0.1 s (round-off may add or drop one), then the end
     assert 28 <= len(drawn) <= 32, drawn
     assert drawn[0] == "verifying: replaying 100/400 sections" and drawn[-1] == "verifying: replaying 400/400 sections"
+
+
+@pytest.mark.parametrize("forks", [True, False])
+def test_trace_draws_fit_png_beside_the_tracing_as_fit_draws_it(tmp_path, monkeypatch, forks):
+    """trace draws fit.png in a child while the figure is traced (where it may fork): the same file
+    as ``skatetrace fit`` draws, recorded with the run's other files."""
+    from skatetrace import processes
+
+    monkeypatch.setattr(processes, "can_fork", lambda: forks)
+    parent = os.getpid()
+    drawn_in = []
+    real = cli._fit_png
+
+    def spy(res):
+        drawn_in.append(os.getpid() != parent)
+        return real(res)
+
+    monkeypatch.setattr(cli, "_fit_png", spy)
+    svg = tmp_path / "bean.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                   '<path d="M10 50 C10 10 90 10 90 50 C90 90 10 90 10 50"/></svg>')
+    common = ["--size", "4m", "--tol", "1mm"]
+    assert main(["trace", str(svg), *common, "--reach", "none", "--out", str(tmp_path / "t"), "--no-viewer"]) == 0
+    assert drawn_in == ([] if forks else [False])  # a child's own list is not this one's
+    assert main(["fit", str(svg), *common, "--out", str(tmp_path / "f")]) == 0
+    assert (tmp_path / "t" / "fit.png").read_bytes() == (tmp_path / "f" / "fit.png").read_bytes()
+    assert "fit.png" in json.loads((tmp_path / "t" / MANIFEST).read_text())["files"]

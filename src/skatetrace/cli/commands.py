@@ -8,10 +8,12 @@ unreadable or malformed figure file).
 from __future__ import annotations
 
 import argparse
+import io
 import math
 import sys
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
+from functools import partial
 from pathlib import Path
 
 from ..errors import SkatetraceError
@@ -238,16 +240,24 @@ def _fit_summary(res) -> dict:
     }
 
 
-def _write_fit(res, out: Path, plots: bool) -> list[Path]:
-    from ..outputs.files import atomic_write, dumps_json, write_atomically
+def _fit_png(res) -> bytes:
+    """fit.png's bytes: the arc fit (and exact mode's splines) over the drawing."""
+    from ..outputs.plotting import fit_figure
+
+    fig = fit_figure(res.drawing, res.fit, exact=res.exact, unit=res.unit)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return buf.getvalue()
+
+
+def _write_fit(res, out: Path, png: bytes | None) -> list[Path]:
+    """Write fit.json and (given its bytes) fit.png, each whole or not at all."""
+    from ..outputs.files import atomic_write, dumps_json
 
     written = [out / "fit.json"]
     atomic_write(out / "fit.json", dumps_json(_fit_summary(res)))  # strict JSON: NaN written as null
-    if plots:
-        from ..outputs.plotting import fit_figure
-
-        fig = fit_figure(res.drawing, res.fit, exact=res.exact, unit=res.unit)
-        write_atomically(out / "fit.png", lambda tmp: fig.savefig(tmp, format="png", dpi=110))  # whole or not at all
+    if png is not None:
+        atomic_write(out / "fit.png", png)
         written.append(out / "fit.png")
     return written
 
@@ -259,7 +269,7 @@ def _fit(args) -> int:
         raise SkatetraceError(f"{args.drawing!r} is not a drawing: 'fit' takes an SVG or a point list "
                               f"({', '.join(DRAWING_SUFFIXES)})")
     out = Path(args.out)
-    paths = _write_fit(res, out, not args.no_plots)
+    paths = _write_fit(res, out, None if args.no_plots else _fit_png(res))
     fit = res.fit
     for note in res.notes:
         print(f"note: {note}")
@@ -333,13 +343,23 @@ def _compiling():
 
 
 def _trace(args) -> int:
+    from ..processes import Background
+
+    t0 = time.perf_counter()
+    res = _resolve(args, args.figure)
+    # fit.png is drawn in a child while the figure is traced (which leaves a core idle at times)
+    drawn = Background(partial(_fit_png, res)) if res.fit is not None and not args.no_plots else None
+    with drawn or nullcontext():
+        return _traced(args, res, drawn, t0)
+
+
+def _traced(args, res, drawn, t0: float) -> int:
+    """``trace`` once the figure is read: ``drawn`` is fit.png being drawn (or None), ``t0`` when the run began."""
     from ..outputs.results import reporting as writing
     from ..outputs.results import write_results
     from ..pipeline import too_large_to_plan, trace_and_verify, trace_within_default_reach
     from ..verification.verify import reporting as verifying
 
-    t0 = time.perf_counter()
-    res = _resolve(args, args.figure)
     figure = res.figure
     base = figure.params or SleighParams()
     params = SleighParams(M=args.M if args.M is not None else base.M, m=args.m if args.m is not None else base.m,
@@ -393,7 +413,7 @@ def _trace(args) -> int:
     with writing(LongWork(status, "{stage}: {done}/{total} rows")):
         write_results(out, trace, schedule, states, report, unit=res.unit, feasibility=done.feasibility)
     if res.fit is not None:
-        _write_fit(res, out, not args.no_plots)
+        _write_fit(res, out, None if drawn is None else drawn.result())
     if not args.no_plots:
         from ..outputs.plotting import save_all
 
