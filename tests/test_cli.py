@@ -708,13 +708,15 @@ def test_long_work_is_redrawn_at_most_ten_times_a_second_and_at_its_end(capsys, 
     assert drawn[0] == "verifying: replaying 100/400 sections" and drawn[-1] == "verifying: replaying 400/400 sections"
 
 
-@pytest.mark.parametrize("forks", [True, False])
-def test_trace_draws_fit_png_beside_the_tracing_as_fit_draws_it(tmp_path, monkeypatch, forks):
-    """trace draws fit.png in a child while the figure is traced (where it may fork): the same file
-    as ``skatetrace fit`` draws, recorded with the run's other files."""
+@pytest.mark.parametrize("forks, workers", [(True, []), (False, []), (True, ["--workers", "1"])])
+def test_trace_draws_fit_png_beside_the_tracing_as_fit_draws_it(tmp_path, monkeypatch, forks, workers):
+    """trace draws fit.png in a child while the figure is traced (where it may fork, and more than
+    one process is allowed): the same file as ``skatetrace fit`` draws, recorded with the run's
+    other files."""
     from skatetrace import processes
 
     monkeypatch.setattr(processes, "can_fork", lambda: forks)
+    monkeypatch.setattr(processes, "available_workers", lambda: 2)  # whatever this machine has
     parent = os.getpid()
     drawn_in = []
     real = cli._fit_png
@@ -728,8 +730,9 @@ def test_trace_draws_fit_png_beside_the_tracing_as_fit_draws_it(tmp_path, monkey
     svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
                    '<path d="M10 50 C10 10 90 10 90 50 C90 90 10 90 10 50"/></svg>')
     common = ["--size", "4m", "--tol", "1mm"]
-    assert main(["trace", str(svg), *common, "--reach", "none", "--out", str(tmp_path / "t"), "--no-viewer"]) == 0
-    assert drawn_in == ([] if forks else [False])  # a child's own list is not this one's
+    assert main(["trace", str(svg), *common, "--reach", "none", "--out", str(tmp_path / "t"), "--no-viewer",
+                 *workers]) == 0
+    assert drawn_in == ([] if forks and not workers else [False])  # a child's own list is not this one's
     assert main(["fit", str(svg), *common, "--out", str(tmp_path / "f")]) == 0
     assert (tmp_path / "t" / "fit.png").read_bytes() == (tmp_path / "f" / "fit.png").read_bytes()
     assert "fit.png" in json.loads((tmp_path / "t" / MANIFEST).read_text())["files"]

@@ -143,7 +143,7 @@ def test_background_answers_from_a_child_while_this_process_goes_on(forking):
     import time
 
     parent = os.getpid()
-    with processes.Background(lambda: (os.getpid(), [1.5] * 3)) as job:
+    with processes.Background(lambda: (os.getpid(), [1.5] * 3), 2) as job:
         started = time.perf_counter()  # the child computes while this process does something else
         here = sum(range(1000))
         assert time.perf_counter() - started < 1.0 and here == 499500
@@ -162,20 +162,21 @@ def test_background_whose_child_dies_or_fails_is_computed_here(forking, how):
             raise RuntimeError("only in the child")
         return "here"
 
-    with processes.Background(work) as job:
+    with processes.Background(work, 2) as job:
         assert job.result() == "here"
 
     def always_fails():
         raise ValueError("a bad input")
 
-    with processes.Background(always_fails) as job, pytest.raises(ValueError, match="a bad input"):
+    with processes.Background(always_fails, 2) as job, pytest.raises(ValueError, match="a bad input"):
         job.result()  # raised here, as without a child
 
 
-def test_background_without_fork_computes_on_demand_here(monkeypatch):
-    monkeypatch.setattr(processes, "can_fork", lambda: False)
+@pytest.mark.parametrize("why", ["no fork", "one worker"])
+def test_background_without_fork_computes_on_demand_here(monkeypatch, why):
+    monkeypatch.setattr(processes, "can_fork", lambda: why != "no fork")
     calls = []
-    with processes.Background(lambda: calls.append(os.getpid()) or "done") as job:
+    with processes.Background(lambda: calls.append(os.getpid()) or "done", 1 if why == "one worker" else None) as job:
         assert calls == []  # nothing is computed until asked for
         assert job.result() == "done"
     assert calls == [os.getpid()]
@@ -185,7 +186,7 @@ def test_leaving_the_block_ends_a_child_still_at_work(forking):
     import time
 
     with pytest.raises(KeyboardInterrupt):
-        with processes.Background(lambda: time.sleep(60)) as job:
+        with processes.Background(lambda: time.sleep(60), 2) as job:
             child = job._child[0]
             raise KeyboardInterrupt
     assert not child.is_alive() and child.exitcode is not None

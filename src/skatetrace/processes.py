@@ -204,18 +204,19 @@ class Background(Generic[R]):
     """``fn()`` computed in a forked child while this process goes on with other work.
 
     Use it as a context manager; :meth:`result` waits for the answer (it comes back pickled).
-    Where forking is not safe (:func:`can_fork`), or the child fails or dies, :meth:`result`
-    calls ``fn()`` here instead, so an error is raised here, as without a child. Leaving the
-    ``with`` block (an error, an interrupt) ends a child still at work.
+    With ``workers=1`` (one process asked for), where forking is not safe (:func:`can_fork`), or
+    where the child fails or dies, :meth:`result` calls ``fn()`` here instead, so an error is
+    raised here, as without a child. Leaving the ``with`` block (an error, an interrupt) ends a
+    child still at work.
 
     For work whose inputs are known early and whose answer is wanted late, beside work that
     leaves a core idle part of the time: the command line draws fit.png while the figure is traced.
     """
 
-    def __init__(self, fn: Callable[[], R]):
+    def __init__(self, fn: Callable[[], R], workers: int | None = None):
         self._fn = fn
         self._child = None
-        if can_fork():
+        if worker_count(2, workers) > 1 and can_fork():
             context = multiprocessing.get_context("fork")
             receive, send = context.Pipe(duplex=False)
             child = context.Process(target=_forked_part, args=(_called, [fn], send), daemon=True)

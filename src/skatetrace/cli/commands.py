@@ -348,7 +348,7 @@ def _trace(args) -> int:
     t0 = time.perf_counter()
     res = _resolve(args, args.figure)
     # fit.png is drawn in a child while the figure is traced (which leaves a core idle at times)
-    drawn = Background(partial(_fit_png, res)) if res.fit is not None and not args.no_plots else None
+    drawn = Background(partial(_fit_png, res), args.workers) if res.fit is not None and not args.no_plots else None
     with drawn or nullcontext():
         return _traced(args, res, drawn, t0)
 
