@@ -640,9 +640,12 @@ def test_ctrl_c_stops_the_planner_and_its_workers_with_one_line(tmp_path, whom):
     import signal
     import time
 
+    # as from a terminal: a suite run in the background (``pytest &``) has Ctrl-C ignored, which its
+    # children inherit, and a command started that way rightly carries on
     run = subprocess.Popen([sys.executable, "-m", "skatetrace", "trace", "school:paragraph-double-three",
                             "--out", str(tmp_path / "out"), "--no-plots", "--no-viewer"],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert run.stdout.readline().startswith("note:")  # the figure is read: planning has begun
     time.sleep(2.0)
     assert run.poll() is None, "the run ended before it could be interrupted"
