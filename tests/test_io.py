@@ -2,6 +2,7 @@ import os
 from pathlib import Path
 from unittest import mock
 
+import numpy as np
 import pytest
 
 from skatetrace.outputs.files import atomic_write, staged
@@ -73,6 +74,60 @@ def test_controls_csv_formatted_in_chunks_and_processes_is_the_same_text_and_rea
     for k in ("t", "a", "b", "adot", "bdot"):
         np.testing.assert_array_equal(back[k], getattr(schedule, k))
     np.testing.assert_array_equal(back["curve"], np.array([0, 1, 1])[schedule.section])
+
+
+@pytest.mark.parametrize("odd", [None, np.nan, -np.inf])
+def test_controls_csv_formatted_run_by_run_is_the_same_text_as_row_by_row(tmp_path, monkeypatch, odd):
+    """Rows of one piece, curve and section are formatted as one table with the integers spliced
+    in: the same bytes as row by row; a chunk holding a value that is not finite goes row by row."""
+    from skatetrace.dynamics.controls import ControlSchedule
+    from skatetrace.outputs import results
+
+    rng = np.random.default_rng(3)
+    n = 3000
+    section = np.repeat(np.arange(6), n // 6)
+    piece = (np.arange(n) // 125) % 3  # runs of 125 rows, several pieces a section
+    schedule = ControlSchedule(t=np.sort(rng.random(n)) * 10.0, a=rng.normal(size=n), b=rng.normal(size=n) * 1e-7,
+                               adot=rng.normal(size=n) * 1e17, bdot=-rng.random(n), section=section, piece=piece)
+    states = {k: rng.normal(size=n) for k in ("x", "y", "theta", "p1", "p2", "xi1", "xi2")}
+    if odd is not None:
+        states["xi2"][1234] = odd
+    texts = []
+    for run_rows in (10**9, 1):  # row by row, then run by run where the runs allow
+        monkeypatch.setattr(results, "_RUN_ROWS", run_rows)
+        results._write_csv(tmp_path / "c.csv", schedule, states, [0, 0, 1, 1, 2, 2])
+        texts.append((tmp_path / "c.csv").read_bytes())
+    assert texts[0] == texts[1] and texts[0].count(b"\n") == n + 1
+    back = results.read_controls(tmp_path / "c.csv")
+    np.testing.assert_array_equal(back["xi2"], states["xi2"])
+    np.testing.assert_array_equal(back["piece"], piece)
+    np.testing.assert_array_equal(back["curve"], section // 2)
+
+
+def test_controls_csv_floats_read_back_as_the_same_doubles_in_their_shortest_digits():
+    """Every double, subnormals and the largest included, is written with as few digits as repr
+    uses and reads back exactly; a column holding nan or inf is written as repr writes it."""
+    import numpy as np
+
+    from skatetrace.outputs.results import _column_text
+
+    rng = np.random.default_rng(7)
+    bits = rng.integers(0, 2**63, size=20000, dtype=np.uint64) | (rng.integers(0, 2, 20000, dtype=np.uint64) << 63)
+    values = bits.view(np.float64)
+    values = np.concatenate([values[np.isfinite(values)], [0.0, -0.0, 5e-324, 1.7976931348623157e308, 1e-7, 1e16,
+                                                           0.1, 1 / 3, 123456789.0, -2.5e-300]])
+    text = _column_text(values)
+    back = np.array([float(t) for t in text])
+    assert np.array_equal(back.view(np.uint64), values.view(np.uint64))  # -0.0 too, bit for bit
+
+    def digits(s: str) -> int:
+        return len(s.split("e")[0].lstrip("-").replace(".", "").strip("0"))
+
+    assert all(digits(t.decode()) <= digits(repr(v)) for t, v in zip(text, values.tolist()))
+    odd = np.array([1.5, np.nan, -np.inf, np.inf])
+    assert _column_text(odd) == [b"1.5", b"nan", b"-inf", b"inf"]
+    assert _column_text(np.array([0, 3, -12], dtype=np.int64)) == [b"0", b"3", b"-12"]
+    assert _column_text(np.zeros(0)) == []
 
 
 # ---------------------------------------------------------------------------------------------------------
