@@ -187,6 +187,6 @@ def test_leaving_the_block_ends_a_child_still_at_work(forking):
 
     with pytest.raises(KeyboardInterrupt):
         with processes.Background(lambda: time.sleep(60), 2) as job:
-            child = job._child[0]
+            child = job._child._process
             raise KeyboardInterrupt
     assert not child.is_alive() and child.exitcode is not None

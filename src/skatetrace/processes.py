@@ -167,33 +167,46 @@ def map_forked(fn: Callable[[J], R], items: Sequence[J], workers: int | None = N
     count = worker_count(len(items), workers)
     if count <= 1 or not can_fork():
         return [fn(item) for item in items]
-    context = multiprocessing.get_context("fork")
     children = []
     try:
         for k in range(1, count):
-            receive, send = context.Pipe(duplex=False)
-            child = context.Process(target=_forked_part, args=(fn, list(items[k::count]), send), daemon=True)
-            child.start()
-            send.close()
-            children.append((k, child, receive))
+            children.append((k, _Child(fn, list(items[k::count]))))
         results: list = [None] * len(items)
         results[0::count] = [fn(item) for item in items[0::count]]
-        for k, child, receive in children:
-            try:
-                part = receive.recv()
-            except EOFError:  # the child died before it could answer
-                part = None
-            child.join()
-            if part is None or child.exitcode != 0:
-                part = [fn(item) for item in items[k::count]]
-            results[k::count] = part
+        for k, child in children:
+            part = child.answer()
+            results[k::count] = part if part is not None else [fn(item) for item in items[k::count]]
         return results
     finally:
-        for _, child, receive in children:
-            receive.close()
-            if child.is_alive():  # an interrupt here (or an error) while the child still draws
-                child.terminate()
-                child.join()
+        for _, child in children:
+            child.end()  # an interrupt here (or an error) while the child still draws
+
+
+class _Child:
+    """A forked child computing ``[fn(item) for item in items]`` (:func:`_forked_part`), its answer piped back."""
+
+    def __init__(self, fn: Callable, items: list):
+        context = multiprocessing.get_context("fork")
+        self._receive, send = context.Pipe(duplex=False)
+        self._process = context.Process(target=_forked_part, args=(fn, items, send), daemon=True)
+        self._process.start()
+        send.close()
+
+    def answer(self) -> list | None:
+        """The child's results, waited for; None where it failed or died before it could answer."""
+        try:
+            part = self._receive.recv()
+        except EOFError:
+            part = None
+        self._process.join()
+        return part if self._process.exitcode == 0 else None
+
+    def end(self) -> None:
+        """Close the pipe, and end the child if it is still at work."""
+        self._receive.close()
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join()
 
 
 def _called(fn: Callable[[], R]) -> R:
@@ -215,28 +228,17 @@ class Background(Generic[R]):
 
     def __init__(self, fn: Callable[[], R], workers: int | None = None):
         self._fn = fn
-        self._child = None
-        if worker_count(2, workers) > 1 and can_fork():
-            context = multiprocessing.get_context("fork")
-            receive, send = context.Pipe(duplex=False)
-            child = context.Process(target=_forked_part, args=(_called, [fn], send), daemon=True)
-            child.start()
-            send.close()
-            self._child = (child, receive)
+        self._child = _Child(_called, [fn]) if worker_count(2, workers) > 1 and can_fork() else None
 
     def result(self) -> R:
         """``fn()``: the child's answer, else computed here."""
-        if self._child is not None:
-            child, receive = self._child
-            self._child = None
+        child, self._child = self._child, None
+        if child is not None:
             try:
-                part = receive.recv()
-            except EOFError:  # the child died before it could answer
-                part = None
+                part = child.answer()
             finally:
-                receive.close()
-            child.join()
-            if part is not None and child.exitcode == 0:
+                child.end()
+            if part is not None:
                 return part[0]
         return self._fn()
 
@@ -244,13 +246,9 @@ class Background(Generic[R]):
         return self
 
     def __exit__(self, *exc) -> None:
-        if self._child is not None:
-            child, receive = self._child
-            self._child = None
-            receive.close()
-            if child.is_alive():
-                child.terminate()
-            child.join()
+        child, self._child = self._child, None
+        if child is not None:
+            child.end()
 
 
 def evaluated_ahead(fn: Callable[[J], R], items: Iterable[J], wanted: Callable[[J], bool], *,
