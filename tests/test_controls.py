@@ -76,6 +76,34 @@ def test_many_spans_at_once_sample_as_each_alone():
         np.testing.assert_array_equal(spans[k], alone)
 
 
+def test_a_scale_floor_samples_tiny_spans_to_the_others_scale():
+    # three spans: values of scale 5, 2.5 and 5e-6 (the mass passing through the contact point)
+    bounds = np.array([0.0, 4.0, 7.0, 10.0])
+    gain = np.array([1.0, 0.5, 1e-6])
+
+    def fn(t, left):
+        after = np.searchsorted(bounds, t, side="right") - 1
+        before = np.searchsorted(bounds, t, side="left") - 1
+        k = np.clip(np.where(left, before, after), 0, bounds.size - 2)
+        return tuple(gain[k] * v for v in _fn(t))
+
+    alone = sample_intervals(fn, bounds)
+    floored = sample_intervals(fn, bounds, scale_floor=1e-2)
+    # spans above the floor (0.5 >= 1e-2 of 1) are sampled exactly as alone
+    for k in (0, 1):
+        np.testing.assert_array_equal(floored[k], alone[k])
+    # the tiny span is sampled to 1e-2 of the largest scale, not to its own: far fewer points
+    assert floored[2].size < alone[2].size / 5
+    t = floored[2]
+    a, b, ad, bd = (gain[2] * v for v in _fn(t))
+    tt = np.linspace(7.0, 10.0, 100_001)
+    ref = [gain[2] * v for v in _fn(tt)]
+    sa, sb = CubicHermiteSpline(t, a, ad), CubicHermiteSpline(t, b, bd)
+    err = max(np.abs(sa(tt) - ref[0]).max(), np.abs(sb(tt) - ref[1]).max())
+    assert err <= 1.1 * 1e-11 * 1e-2 * 5.0  # value_tol times the floor's share of the largest |a|, |b|
+    assert err > 1.1 * 1e-11 * gain[2] * 5.0  # and beyond what the span alone was held to
+
+
 def test_a_span_of_zero_length_is_sampled_without_warnings():
     # a planned piece of no duration puts two breakpoints at one time
     import warnings

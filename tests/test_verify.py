@@ -204,3 +204,33 @@ def test_many_sections_are_sampled_side_by_side_as_one_by_one_and_the_verificati
         assert {total for s, _, total in seen if s == stage} == {20}
     assert [s for s, _, _ in seen] == sorted((s for s, _, _ in seen), key=["sampling the controls", "replaying",
                                                                           "measuring"].index)
+
+
+def test_a_section_through_the_contact_point_is_not_sampled_to_round_off(monkeypatch, tmp_path):
+    # A dot of Adwaita's view-app-grid icon (a circle of four cubics, 1.2 m across at 1 mm) fitted
+    # by 25 arcs: its launch-glide-stop manoeuvre passes the mass through the blade's contact
+    # point, where two pieces' values are all tiny. Held each to its own scale, they took 322,000
+    # rows each (873,000 for the dot); held to SCALE_FLOOR of the section's, the replay is as close.
+    import skatetrace as st
+    from skatetrace.drawings import fitting
+    from skatetrace.pipeline import trace_and_verify
+
+    svg = ('<svg viewBox="0 0 16 16" xmlns="http://www.w3.org/2000/svg"><path d="m 4 3 c -0.554688 0 -1 '
+           '0.445312 -1 1 s 0.445312 1 1 1 s 1 -0.445312 1 -1 s -0.445312 -1 -1 -1 z"/></svg>')
+    (tmp_path / "dot.svg").write_text(svg)
+    # fitted as before a smooth closed path was merged: 32 arcs, traced as one section of 25 pieces
+    with monkeypatch.context() as m:
+        m.setattr(fitting._Fitter, "merged", lambda self, geom, intervals, least=None: intervals)
+        fig = st.resolve(tmp_path / "dot.svg", size="1.2m", tol="1mm", height=1.7).figure
+    assert len(fig.curves[0].pieces) > 20
+    options = st.TraceOptions(speed=2.0)
+    done = trace_and_verify(fig, fig.params, options)
+    assert done.success
+    reach = np.hypot(done.schedule.a, done.schedule.b)
+    assert reach.min() < 1e-6 * reach.max()  # the mass passes through the contact point
+    assert done.schedule.t.size < 400_000
+    monkeypatch.setattr(verify_module, "SCALE_FLOOR", 0.0)
+    each = trace_and_verify(fig, fig.params, options)
+    assert each.schedule.t.size > 2 * done.schedule.t.size
+    # the same deviation within the replay's spread (the sampling is not what bounds it)
+    assert done.report.max_deviation <= 1.2 * each.report.max_deviation

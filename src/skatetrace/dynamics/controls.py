@@ -130,7 +130,8 @@ def sample_adaptively(fn, t0: float, t1: float, *, value_tol: float = 1e-11, rat
 
 
 def sample_intervals(fn, bounds, *, value_tol: float = 1e-11, rate_tol: float = 1e-9, n0: int = 16,
-                     max_points: int = 200_000, min_step: float = 1e-7, values: bool = False):
+                     max_points: int = 200_000, min_step: float = 1e-7, values: bool = False,
+                     scale_floor: float = 0.0):
     """:func:`sample_adaptively` on every span ``[bounds[k], bounds[k + 1]]``, all spans at once.
 
     Parameters
@@ -144,13 +145,18 @@ def sample_intervals(fn, bounds, *, value_tol: float = 1e-11, rate_tol: float = 
         Increasing breakpoints.
     values : bool
         Also return everything ``fn`` returned at the sampled times.
+    scale_floor : float
+        A span's scales (its largest ``|a|, |b|`` and its largest rate) are taken as at least this
+        share of the largest over all spans. With the default 0 each span is sampled as alone; a
+        span whose values are all tiny (the mass passing through the blade's contact point) is
+        otherwise held to tolerances far below the round-off of the others.
 
     Returns
     -------
     spans : list of ndarray
-        The times of each span, its two ends included; the same as :func:`sample_adaptively` on
-        that span alone (tolerances relative to the span's own largest values), at a fraction of
-        the Python overhead when there are many spans.
+        The times of each span, its two ends included; with ``scale_floor=0`` the same as
+        :func:`sample_adaptively` on that span alone (tolerances relative to the span's own largest
+        values), at a fraction of the Python overhead when there are many spans.
     rows : ndarray, shape (k, n)
         With ``values=True``: ``fn``'s rows at ``np.concatenate(spans)``.
     """
@@ -183,6 +189,9 @@ def sample_intervals(fn, bounds, *, value_tol: float = 1e-11, rate_tol: float = 
         vm, vq = both[:, :n], both[:4, n:]
         np.maximum.at(v_scale, k, np.max(np.abs(vm[:2]), axis=0))
         np.maximum.at(r_scale, k, np.max(np.abs(vm[2:4]), axis=0))
+        if scale_floor:
+            np.maximum(v_scale, scale_floor * v_scale.max(), out=v_scale)
+            np.maximum(r_scale, scale_floor * r_scale.max(), out=r_scale)
         y0, y1, d0, d1 = v[:2, todo], v[:2, todo + 1], v[2:4, todo], v[2:4, todo + 1]
         # The Hermite cubic's value error peaks at the midpoint; its derivative error vanishes
         # there and peaks near u = 0.21 and 0.79, so the rates are checked at u = 1/4 (97% of it).
