@@ -260,6 +260,47 @@ def test_a_merge_that_drifts_when_laid_out_keeps_greedys_fit(monkeypatch):
     assert fit.n_arcs + fit.n_lines == 900 and "kept greedy's" in fit.message
 
 
+def cubic_circle(r, k, center=(0.0, 0.0)):
+    """A circle of radius ``r`` drawn as four cubics with handles ``k * r`` (as icon sets draw dots)."""
+    cx, cy = center
+    quads = []
+    for q in range(4):
+        c, s = math.cos(q * math.pi / 2), math.sin(q * math.pi / 2)
+
+        def rot(x, y, c=c, s=s):
+            return (cx + r * (c * x - s * y), cy + r * (s * x + c * y))
+
+        quads.append(BezierPiece((rot(1, 0), rot(1, k), rot(k, 1), rot(0, 1))))
+    return Path(tuple(quads), closed=True)
+
+
+@pytest.mark.parametrize("k", [0.554688, 0.5523])
+def test_a_circle_of_four_cubics_is_a_few_arcs(k, monkeypatch):
+    # Adwaita's dots (view-app-grid: nine, k = 0.554688) at 6 m: each quarter's curvature has three
+    # extrema, so greedy fitted 16 spiral spans, 32 arcs a dot whatever the tolerance (0.1 to 2 mm),
+    # 9 distinct sections of 25 to 28 pieces. A closed path that is one smooth run is merged
+    # whatever its number of spans (3, not MERGE_MIN_SPANS).
+    path = cubic_circle(0.6, k)
+    fit = fit_path(path, 1e-3)
+    assert fit.success and fit.hausdorff <= 1e-3
+    assert fit.n_arcs + fit.n_lines <= 8
+    check_structure(path, fit)
+    a, b, spacing = brute_force(path, fit)
+    assert max(a, b - spacing / 2) <= fit.hausdorff + 1e-12
+    monkeypatch.setattr(fitting._Fitter, "merged", lambda self, geom, intervals, least=None: intervals)
+    assert quiet_fit(path, 1e-3).n_arcs > 2 * (fit.n_arcs + fit.n_lines)
+
+
+def test_translated_copies_of_a_circle_fit_alike():
+    # the nine dots of a grid: the same pieces up to round-off wherever they are drawn
+    fits = [fit_path(cubic_circle(0.6, 0.554688, (2.4 * i - 2.4, 2.4 * j - 2.4)), 1e-3)
+            for i in range(3) for j in range(3)]
+    counts = {f.n_arcs + f.n_lines for f in fits}
+    assert len(counts) == 1
+    lengths = np.array([[s.length for _, s in all_segments(f)] for f in fits])
+    assert np.ptp(lengths, axis=0).max() < 1e-9
+
+
 def gentle(n, side, turn_deg):
     """``n`` lines of length ``side``, each turning by ``turn_deg`` from the one before (smooth joins)."""
     heading, pts = 0.0, [(0.0, 0.0)]
