@@ -266,6 +266,52 @@ def test_spiral_sections_are_cached_by_shape_not_confused_with_arcs():
     assert tr.sections[0].phases != tr.sections[1].phases
 
 
+def test_copies_of_a_shape_that_differ_by_round_off_are_traced_once():
+    # nine dots of an icon differ in the last digits of their pieces (about 1e-11 of them): one
+    # shape, traced once, each copy still laid out from its own pieces and verified against them
+    from skatetrace.tracing.shapes import SHAPE_TOL
+
+    rng = np.random.default_rng(3)
+    base = [(1.6661106953181, 1.6517321274890), (1.6650919230777, 1.6490492460729)]
+    curves = []
+    for i in range(5):
+        jitter = 1.0 + 2e-11 * rng.standard_normal((2, 2))
+        segs = tuple(Segment(k * j0, L * j1) for (k, L), (j0, j1) in zip(base, jitter))
+        curves.append(Curve(segs, (Join("smooth"),), name=f"dot{i}"))
+    # and one whose curvature is 1e-6 of itself off: another shape
+    curves.append(Curve((Segment(base[0][0] * (1 + 1e-6), base[0][1]), Segment(*base[1])), (Join("smooth"),),
+                        name="other"))
+    fig = Figure("dots", tuple(curves))
+    tr = trace_figure(fig, P)
+    assert tr.success, tr.message
+    assert len({id(s.phases) for s in tr.sections[:5]}) == 1
+    assert tr.sections[5].phases is not tr.sections[0].phases
+    assert 2e-11 * 10 < SHAPE_TOL  # the jitter is well inside the tolerance
+    rep = verify(tr)
+    assert rep.success, rep.message
+
+
+def test_the_shape_index_compares_lengths_and_turning_within_its_tolerance():
+    from skatetrace.tracing.shapes import SHAPE_TOL, ShapeIndex, exact_key
+
+    def key(*segs, params=P):
+        fig = Figure("k", (Curve(tuple(Segment(k, L) for k, L in segs), (Join("smooth"),) * (len(segs) - 1)),))
+        return exact_key(params, fig.curves[0].sections()[0], TraceOptions())
+
+    index = ShapeIndex()
+    first = key((0.5, 2.0), (0.0, 1.0))
+    assert index.find(first) is first
+    assert index.find(key((0.5 * (1 + 0.4 * SHAPE_TOL), 2.0 * (1 - 0.4 * SHAPE_TOL)), (0.0, 1.0 + 4e-10))) is first
+    # beyond the tolerance in a length, in a turning (curvature times length), or in the pieces
+    for other in (key((0.5, 2.0 * (1 + 3 * SHAPE_TOL)), (0.0, 1.0)),
+                  key((0.5 + 3 * SHAPE_TOL / 2.0, 2.0), (0.0, 1.0)),
+                  key((0.5, 2.0), (0.0, 1.0), (0.0, 1.0)),
+                  key((0.5, 2.0), (0.0, 1.0), params=SleighParams(M=3.0, m=1.0, I=3.0))):
+        assert index.find(other) is other
+    # keys known beforehand (a cache of solved sections) are found again
+    assert ShapeIndex([first]).find(key((0.5, 2.0), (0.0, 1.0 + 1e-13))) is first
+
+
 # --------------------------------------------------------------------------------------------------
 # issue 6: the shortcuts of the placement search change no choice
 # --------------------------------------------------------------------------------------------------

@@ -36,6 +36,7 @@ from ..figures.geometry import travel
 from ..processes import evaluated_ahead, run_jobs
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
 from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
+from .shapes import ShapeIndex, exact_key
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
 
@@ -653,16 +654,12 @@ class FigureTrace:
         return self.start_times[-1] + (last.duration if last.phases else 0.0)
 
 
-def _section_key(params: SleighParams, section: Section, options: TraceOptions) -> tuple:
-    return (params, options, tuple((tuple(round(c, 14) for c in s.coefficients), round(s.length, 14))
-                                   for s in section.segments))
-
-
 def trace_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
                  progress=None, cache: dict | None = None) -> FigureTrace:
     """Trace every section of every curve of ``figure``.
 
-    Sections that are the same up to a rigid motion (same curvatures and lengths) are solved once.
+    Sections that are the same up to a rigid motion (the same curvatures and lengths, up to
+    round-off: :mod:`~skatetrace.tracing.shapes`) are solved once.
     A section that fails is reported and the others are still traced.
 
     Parameters
@@ -683,7 +680,8 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
     cache = {} if cache is None else cache
     traces, starts, t = [], [], 0.0
     all_sections = [(ci, sec) for ci, curve in enumerate(figure.curves) for sec in curve.sections()]
-    keys = [_section_key(params, sec, options) for _, sec in all_sections]
+    shapes = ShapeIndex(cache)
+    keys = [shapes.find(exact_key(params, sec, options)) for _, sec in all_sections]
     todo = {}  # the distinct sections not solved yet, in skating order
     for (ci, sec), key in zip(all_sections, keys):
         if key not in cache and key not in todo:
