@@ -177,3 +177,50 @@ def test_same_legs_compares_curvature_polynomials_and_lengths():
     assert not same_legs([(1.0, 2.0)], [(1.0, 2.5)])
     assert not same_legs([(1.0, 2.0)], [((1.0, 0.1), 2.0)])
     assert not same_legs([(1.0, 2.0)], [(1.0, 1.0), (0.5, 1.0)])
+
+
+def test_a_jump_of_the_stopping_length_is_not_searched_as_a_root(monkeypatch):
+    # A launch of a school figure for a 1.7 m skater over two legs (an arc, then the opposite arc):
+    # for positive ramps the scan's root is where the stopping length jumps (the speed grazing zero
+    # before the stop), not a root. Brent's method at full accuracy on the whole bracket converged
+    # on the jump and was refused; now only a side of it that still crosses the length is searched.
+    from skatetrace.dynamics.presets import skater_params
+    from skatetrace.tracing import maneuver
+
+    params = skater_params(height=1.7)
+    legs = [(0.3921568627450981, 2.55), (-0.3921568627450981, 8.011061266653972)]
+    kw = dict(backward=True)
+    seen = []
+    real = maneuver._jump_at
+    monkeypatch.setattr(maneuver, "_jump_at", lambda *a: seen.append(real(*a)) or seen[-1])
+    fast = solve_stop(params, legs, (0.0, 0.09044954710408228), 1.0, **kw)
+    assert any(j is not None for j in seen)
+    (lo, miss_lo), (hi, miss_hi) = next(j for j in seen if j is not None)
+    assert lo < hi and miss_lo * miss_hi < 0 and min(abs(miss_lo), abs(miss_hi)) > maneuver._JUMP_MISS
+    monkeypatch.setattr(maneuver, "_jump_at", lambda *a: None)
+    full = solve_stop(params, legs, (0.0, 0.09044954710408228), 1.0, **kw)
+    assert fast.success and full.success
+    assert fast.params == full.params and fast.duration == full.duration and fast.residuals == full.residuals
+    assert fast.nfev < full.nfev - 20
+
+
+def test_jump_at_tells_a_jump_from_a_steep_or_missing_stop():
+    from skatetrace.tracing import maneuver
+
+    class Fake:
+        def __init__(self, stop):
+            self.stop = stop
+
+        def run(self, alpha, rtol, atol):
+            s = self.stop(alpha)
+            if s is None:
+                raise maneuver._NoStop
+            return 1.0, np.array([0.0, 0.0, 0.0, 0.0, s])
+
+    root = 0.02
+    assert maneuver._jump_at(Fake(lambda a: 2.0 if a > root else 0.5), root, 1.0, 1e-13, 1e-14) is not None
+    # a continuous stopping length, however steep in alpha near the root (slope 1e3 in log alpha)
+    assert maneuver._jump_at(Fake(lambda a: (a / root) ** 1000), root, 1.0, 1e-13, 1e-14) is None
+    # the stop falls on one side only, or a probe does not stop
+    assert maneuver._jump_at(Fake(lambda a: 2.0 if a > root else 1.5), root, 1.0, 1e-13, 1e-14) is None
+    assert maneuver._jump_at(Fake(lambda a: 2.0 if a > root else None), root, 1.0, 1e-13, 1e-14) is None

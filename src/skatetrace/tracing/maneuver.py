@@ -539,8 +539,10 @@ def solve_stop(
             # Brent's method at full accuracy on the bracket (cannot diverge), then Newton's method
             # on (alpha, tau) from the guess. The scan's accuracy can mislead where the stop is
             # ill-conditioned (the speed creeping to zero): its root was seen 0.2% off the true one.
+            # Where the scan's root is a jump of the stopping length, Brent searches only beside it.
+            jump = _jump_at(stopper, root[0], length, rtol, atol) if root is not None else None
             sol = _bracket_stop(params, legs_spec, y0, sign * 60.0 * t_nat, speed, length, a1, a2, rtol, atol,
-                                singular_limit * scale)
+                                singular_limit * scale, jump)
             nfev += sol[2]
         if sol[0] is None:
             alpha0, tau0 = guess()
@@ -581,12 +583,41 @@ def solve_stop(
     )
 
 
-def _bracket_stop(params, legs_spec, y0, t_max, speed, length, a1, a2, rtol, atol, singular_limit):
+#: Relative step in alpha on either side of the scan's root at which :func:`_jump_at` looks, and the
+#: share of the length by which the stop must miss on both sides for a jump.
+_JUMP_STEP = 1e-7
+_JUMP_MISS = 1e-3
+
+
+def _jump_at(stopper, alpha, length, rtol, atol):
+    """Where the stopping length jumps across ``length`` at ``alpha`` (the scan's root) at full accuracy.
+
+    Where the speed grazes zero before the stop, the first stop comes or goes with a small change
+    of the ramp, and the stopping length jumps: the scan's root is then that jump, not a root, and
+    full-accuracy Brent on the whole bracket converges on it in some sixty integrations, to be
+    refused. At ``alpha (1 -+ _JUMP_STEP)`` the stop falls on both sides of ``length`` and misses it
+    by more than ``_JUMP_MISS`` of it on both (a continuous stopping length would need a slope of
+    1e4 in ``log alpha``). Returns ``((alpha_lo, miss_lo), (alpha_hi, miss_hi))``, the misses
+    signed shares of ``length``, or None where there is no such jump.
+    """
+    out = []
+    for f in (1.0 - _JUMP_STEP, 1.0 + _JUMP_STEP):
+        try:
+            out.append((alpha * f, abs(stopper.run(alpha * f, rtol, atol)[1][4]) / length - 1.0))
+        except _NoStop:
+            return None
+    (_, m1), (_, m2) = out
+    return tuple(out) if m1 * m2 < 0.0 and min(abs(m1), abs(m2)) > _JUMP_MISS else None
+
+
+def _bracket_stop(params, legs_spec, y0, t_max, speed, length, a1, a2, rtol, atol, singular_limit, jump=None):
     """Brent's method for ``alpha`` in ``[a1, a2]``: the first stop of the speed falls at ``length``.
 
     Returns ``((alpha, tau), residuals, nfev)`` or ``(None, None, nfev)`` if the bracket does not
     hold at full accuracy or the stopping length jumps across it (the speed touching zero
-    earlier), so that the root leaves a residual.
+    earlier), so that the root leaves a residual. ``jump`` is :func:`_jump_at`'s answer, a jump
+    inside the bracket: then only the side of it where the stop still crosses ``length`` is
+    searched, and there is none where both sides' ends miss it the same way as the jump's.
     """
     count = 0
 
@@ -609,6 +640,14 @@ def _bracket_stop(params, legs_spec, y0, t_max, speed, length, a1, a2, rtol, ato
         f1, f2 = excess(a1), excess(a2)
         if not f1 * f2 <= 0.0:
             return None, None, count
+        if jump is not None:
+            (lo, f_lo), (hi, f_hi) = jump
+            if f1 * f_lo <= 0.0:
+                a2 = lo
+            elif f_hi * f2 <= 0.0:
+                a1 = hi
+            else:
+                return None, None, count
         alpha = brentq(excess, a1, a2, xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
         tau, yf = run(alpha)
     except (_NoStop, RuntimeError):
