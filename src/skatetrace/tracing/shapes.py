@@ -52,8 +52,9 @@ class ShapeIndex:
     """
 
     def __init__(self, keys=()):
-        # per (params, options, number of pieces): the keys and their terms, stacked
-        self._groups: dict[tuple, tuple[list[tuple], np.ndarray, list[int]]] = {}
+        # per (params, options, number of pieces): the keys, and their terms stacked in an array
+        # that doubles when full (its first len(keys) rows are theirs)
+        self._groups: dict[tuple, tuple[list[tuple], np.ndarray]] = {}
         for key in keys:
             self.find(key)
 
@@ -61,19 +62,19 @@ class ShapeIndex:
         """The known key of ``key``'s shape, or ``key`` itself, known from now on, if it has none."""
         group = (key[0], key[1], len(key[2]))
         terms = _terms(key)
-        known, stack, size = self._groups.get(group, ([], np.empty((0,) + terms.shape), [0]))
-        if known:
-            old = stack[:size[0]]
+        known, stack = self._groups.get(group, ([], np.empty((0,) + terms.shape)))
+        m = len(known)
+        if m:
+            old = stack[:m]
             lengths = np.maximum(old[:, :, 4], terms[None, :, 4])
             close = (np.abs(old[:, :, :4] - terms[None, :, :4]) <= SHAPE_TOL).all(axis=(1, 2)) & (
                 np.abs(old[:, :, 4] - terms[None, :, 4]) <= SHAPE_TOL * lengths).all(axis=1)
             hit = np.flatnonzero(close)
             if hit.size:
                 return known[int(hit[0])]
-        if size[0] == stack.shape[0]:  # full: double it
-            stack = np.concatenate([stack, np.empty((max(4, stack.shape[0]),) + terms.shape)])
-        stack[size[0]] = terms
-        size[0] += 1
+        if m == stack.shape[0]:  # full: double it
+            stack = np.concatenate([stack, np.empty((max(4, m),) + terms.shape)])
+        stack[m] = terms
         known.append(key)
-        self._groups[group] = (known, stack, size)
+        self._groups[group] = (known, stack)
         return key
