@@ -315,8 +315,14 @@ def test_a_run_stopped_before_it_finishes_leaves_the_earlier_run_as_it_was(tmp_p
     assert (out / "result.json").read_text() == "first" and not (out / "b.png").exists()
     assert strict_loads((out / MANIFEST).read_text()) == {**strict_loads((out / MANIFEST).read_text()),
                                                           "complete": True, "files": ["a.png", "result.json"]}
+    # a run killed while writing its manifest leaves the manifest's temporary file beside it
+    half = out / ("." + MANIFEST[:-len(".json")] + ".k1ll3d.partial.json")
+    half.write_text('{"schema": "skatetrace.manifest/1", "fi')
+    mine = out / ".skatetrace-manifest-notes.partial.json"  # a user's file of a similar name stays
+    mine.write_text("mine")
     nxt = OutputFolder(out, "trace")  # the next run removes the killed run's staging folder
-    assert not leftover[0].exists()
+    assert not leftover[0].exists() and not half.exists() and mine.exists()
+    mine.unlink()
     with nxt:
         atomic_write(out / "c.png", "3")
     assert nxt.finish() == ["a.png", "result.json"]
@@ -448,7 +454,9 @@ def _one_run(out, started):
     from skatetrace.outputs.folder import check_finished
 
     manifest = strict_loads((out / MANIFEST).read_text())
-    names = sorted(p.name for p in out.iterdir() if p.name != MANIFEST and not p.name.startswith(STAGING_PREFIX))
+    # (killed while writing its manifest, a run leaves the manifest's temporary file: the next removes it)
+    names = sorted(p.name for p in out.iterdir() if p.name != MANIFEST and not p.name.startswith(STAGING_PREFIX)
+                   and not (p.name.startswith("." + MANIFEST[:-len(".json")] + ".") and p.name.endswith(".partial.json")))
     if manifest["complete"] is False:
         # killed in the instant its files were moved in (on a loaded machine, now and then): the
         # folder may mix two runs, and says so; every reader refuses it
@@ -500,4 +508,4 @@ def test_a_killed_run_never_leaves_a_folder_of_two_runs(tmp_path):
         if delay is None:
             assert main(["view", str(out)]) == 0
     assert main(argv) == 0 and _one_run(out, started)  # the next run cleans up and is whole
-    assert not list(out.glob(STAGING_PREFIX + "*"))
+    assert not list(out.glob(STAGING_PREFIX + "*")) and not list(out.glob(".*.partial.*"))

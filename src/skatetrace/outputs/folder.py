@@ -30,6 +30,9 @@ MANIFEST = ".skatetrace-manifest.json"
 _MANIFEST_SCHEMA = "skatetrace.manifest/1"
 #: The name of a run's staging folder inside its output folder starts with this.
 STAGING_PREFIX = ".skatetrace-run."
+#: The temporary file of a manifest being written (``write_atomically``'s name for it): a run killed
+#: in that instant leaves it beside the manifest.
+_MANIFEST_PARTIAL = f".{Path(MANIFEST).stem}.*.partial{Path(MANIFEST).suffix}"
 
 
 
@@ -221,14 +224,18 @@ def _write_manifest(folder: Path, command: str | None, files, complete: bool = T
 
 
 def _remove_staging(folder: Path) -> None:
-    """Remove the staging folders of runs that were killed (and so never moved their files in)."""
+    """Remove what runs that were killed left: staging folders (never moved in), manifests half written."""
     try:
         leftovers = [p for p in folder.iterdir() if p.name.startswith(STAGING_PREFIX)]
+        partial = list(folder.glob(_MANIFEST_PARTIAL))
     except OSError:
         return
     for p in leftovers:
         if p.is_dir() and not p.is_symlink():
             shutil.rmtree(p, ignore_errors=True)
+    for p in partial:
+        if p.is_file() and not p.is_symlink():
+            p.unlink(missing_ok=True)
 
 
 def check_finished(folder: str | Path) -> None:
