@@ -224,3 +224,26 @@ def test_jump_at_tells_a_jump_from_a_steep_or_missing_stop():
     # the stop falls on one side only, or a probe does not stop
     assert maneuver._jump_at(Fake(lambda a: 2.0 if a > root else 1.5), root, 1.0, 1e-13, 1e-14) is None
     assert maneuver._jump_at(Fake(lambda a: 2.0 if a > root else None), root, 1.0, 1e-13, 1e-14) is None
+
+
+def test_without_the_fallbacks_a_stop_that_needs_them_is_deferred(monkeypatch):
+    # The paper's second arc from the glide at (0, 0): with the secant polish made to fail, the
+    # stop needs Brent's method and Newton's; without them it is a failure marked deferred, found
+    # in a few integrations, and with them it is the stop found as usual.
+    from skatetrace.tracing import maneuver
+
+    params = SleighParams()
+    legs = [(1.25, 0.25132741228718345)]
+    usual = solve_stop(params, legs, (0.0, 0.0), 1.0)
+    monkeypatch.setattr(maneuver, "_refined_stop", lambda *a: (None, None))
+    quick = solve_stop(params, legs, (0.0, 0.0), 1.0, fallback=False)
+    assert not quick.success and quick.deferred and "fallback" in quick.message
+    slow = solve_stop(params, legs, (0.0, 0.0), 1.0)
+    assert usual.success and slow.success and not slow.deferred and not usual.deferred
+    assert slow.params[0] == pytest.approx(usual.params[0], rel=1e-9)
+    assert quick.nfev < slow.nfev
+    # a stop that no ramp brackets is no deferral: the fallbacks would have nothing to search
+    # (half a line into a tight arc, from a glide on the line)
+    monkeypatch.undo()
+    line = solve_stop(params, [(0.0, 0.5), (2.0, 1.0)], (4.0, 0.0), 1.0, fallback=False)
+    assert not line.success and not line.deferred and "no stop" in line.message

@@ -7,6 +7,7 @@ import pytest
 
 from skatetrace import Curve, Figure, Join, Segment, SleighParams, TraceOptions, trace_figure, verify
 from skatetrace.figures.patterns import pattern
+from skatetrace.tracing.sections import TraceStatus
 
 P = SleighParams()
 
@@ -320,11 +321,12 @@ def test_pruned_search_and_mirrored_launches_choose_as_the_full_search(seg, monk
     # the paper's second arc (three placements trace it, the last cannot beat the second) and
     # third (one glide at a = 0, whose launch is its stop reversed; the apexes on the axis lie
     # farther out than that glide's whole reach)
+    from skatetrace.tracing import search
     from skatetrace.tracing import sections as tracing
 
     sec = _single(seg).curves[0].sections()[0]
     fast = tracing.trace_section(P, sec)
-    monkeypatch.setattr(tracing, "_cannot_win", lambda *a: False)
+    monkeypatch.setattr(search, "_cannot_win", lambda *a: False)
     monkeypatch.setattr(tracing, "same_legs", lambda *a: False)
     full = tracing.trace_section(P, sec)
     assert fast.success and full.success
@@ -340,6 +342,7 @@ def test_a_placement_search_in_batches_side_by_side_chooses_as_one_after_another
     import functools
 
     from skatetrace import processes
+    from skatetrace.tracing import search
     from skatetrace.tracing import sections as tracing
 
     if not processes.can_fork() or processes.available_workers() < 2:
@@ -355,8 +358,8 @@ def test_a_placement_search_in_batches_side_by_side_chooses_as_one_after_another
         return real(fn, items, workers)
 
     monkeypatch.setattr(processes, "map_forked", forked)
-    monkeypatch.setattr(tracing, "evaluated_ahead", functools.partial(processes.evaluated_ahead, alone_for=0.0,
-                                                                      batch=2))
+    monkeypatch.setattr(search, "evaluated_ahead", functools.partial(processes.evaluated_ahead, alone_for=0.0,
+                                                                     batch=2))
     batched = tracing.trace_section(P, sec, TraceOptions(workers=2))
     assert made and max(made) > 1  # batches were shared out
     assert here.success and batched.success
@@ -368,7 +371,7 @@ def test_a_placement_search_in_batches_side_by_side_chooses_as_one_after_another
 
 
 def test_placement_keys_within_rounding_are_a_tie_kept_by_the_first():
-    from skatetrace.tracing.sections import _improves
+    from skatetrace.tracing.search import _improves
 
     assert _improves((0.9, 5.0), (1.0, 1.0))
     assert not _improves((1.1, 0.5), (1.0, 1.0))
@@ -486,3 +489,94 @@ def test_a_small_figure_never_starts_a_pool(monkeypatch):
     monkeypatch.setattr(processes, "ProcessPoolExecutor", refuse)
     tr = trace_figure(pattern("double-flower"), None, TraceOptions(workers=2))
     assert tr.success
+
+
+# --------------------------------------------------------------------------------------------------
+# issues 17 and 18: the search prefers stops found without the full-accuracy fallbacks
+# --------------------------------------------------------------------------------------------------
+def _counting_fallbacks(monkeypatch):
+    """Count the calls of the stop's full-accuracy fallbacks (Brent on the bracket, Newton)."""
+    from skatetrace.tracing import maneuver
+
+    calls = []
+    for name in ("_bracket_stop", "_polish_stop"):
+        real = getattr(maneuver, name)
+        monkeypatch.setattr(maneuver, name, lambda *a, _real=real, **k: calls.append(1) or _real(*a, **k))
+    return calls
+
+
+def test_a_placement_whose_stop_needs_the_fallbacks_gives_way_to_one_that_does_not(monkeypatch):
+    # A section of an icon (feather-settings, a 1.7 m skater): a short line, an arc of radius 0.55 m
+    # over 1.7 m, a shorter line. The glide at b = -0.129 (the line's singular point, one model
+    # length off) has a stop that only the fallbacks find (its speed grazes zero before the end):
+    # searched with them from the start, that placement was kept, with the fallbacks run on several
+    # others. Without them, a placement nearer the blade (b = -0.086) is kept and they never run.
+    from skatetrace.dynamics.presets import skater_params
+
+    params = skater_params(height=1.7)
+    curve = Curve((Segment(0.0, 0.04636363636363505), Segment(-1.833333333333332, 1.7135959928671607),
+                   Segment(0.0, 0.024545454545454426)), (Join("smooth"), Join("smooth")), name="f")
+    sec = Figure("f", (curve,)).curves[0].sections()[0]
+    calls = _counting_fallbacks(monkeypatch)
+    tr = trace_figure(Figure("f", (curve,)), params, TraceOptions(speed=2.0, workers=1))
+    assert tr.success and not calls
+    glide = tr.sections[0].glide
+    assert glide["segment"] == 1 and glide["a"] == 0.0 and abs(glide["b"] + 0.0860) < 1e-3
+    # every placement that the search with the fallbacks would have kept reaches farther
+    assert max(tr.sections[0].metrics["max_abs_a"], tr.sections[0].metrics["max_abs_b"]) < 0.1
+    report = verify(tr)
+    assert report.success, report.message
+    assert len(sec.pieces) == 3
+
+
+def _recording_solves(monkeypatch):
+    """Record each placement's manoeuvres: (legs before and after, apex, fallback, stop found, deferred)."""
+    from skatetrace.tracing import sections
+
+    solves = []
+    real = sections._maneuvers
+
+    def recorded(params, before, after, glide_ab, kw):
+        stop, launch = real(params, before, after, glide_ab, kw)
+        deferred = stop.deferred or bool(launch and launch.deferred)
+        solves.append(((len(before), len(after), glide_ab), kw["fallback"], stop.success, deferred))
+        return stop, launch
+
+    monkeypatch.setattr(sections, "_maneuvers", recorded)
+    return solves
+
+
+def test_a_section_only_the_fallbacks_trace_is_searched_again_with_them(monkeypatch):
+    # With the secant polish made to fail everywhere, every stop that a scan brackets needs the
+    # fallbacks: the first search keeps nothing and the second traces the paper's second arc.
+    from skatetrace.tracing import maneuver, sections
+
+    monkeypatch.setattr(maneuver, "_refined_stop", lambda *a: (None, None))
+    solves = _recording_solves(monkeypatch)
+    tr = sections.trace_section(P, _single(Segment(1.25, 0.5026548245743669)).curves[0].sections()[0])
+    assert tr.success and max(abs(v) for v in tr.residuals.values()) < 1e-10
+    quick = [s for s in solves if not s[1]]
+    assert quick and all(deferred and not found for _, _, found, deferred in quick)
+    full = [s[0] for s in solves if s[1]]
+    assert full and full == [s[0] for s in quick][:len(full)]  # the same placements, in the same order
+
+
+def test_a_section_nothing_traces_solves_each_placement_once_with_the_fallbacks(monkeypatch):
+    # A line into a tight arc (a line of 1, an arc of radius 0.5): no placement traces it, with or
+    # without the fallbacks. The glides on the line fail for want of any stop (no bracket), so the
+    # second search takes them from the first; only the placements that wanted the fallbacks are
+    # solved again, and the failure keeps the first one's reason.
+    from skatetrace.tracing import sections
+
+    solves = _recording_solves(monkeypatch)
+    fig = Figure("s", (Curve((Segment(0.0, 1.0), Segment(2.0, 1.0)), (Join("smooth"),), name="s"),))
+    tr = sections.trace_section(P, fig.curves[0].sections()[0])
+    assert not tr.success and tr.status is TraceStatus.NO_STOP
+    assert "no stop of length 1.5 found" in tr.message and "tried 9 glide placements" in tr.message
+    quick = [s for s in solves if not s[1]]
+    full = [s for s in solves if s[1]]
+    assert len(quick) == 9
+    settled = [s[0] for s in quick if not s[3]]
+    assert settled and not set(settled) & {s[0] for s in full}
+    assert [s[0] for s in full] == [s[0] for s in quick if s[3]]
+    assert tr.nfev > 0

@@ -23,8 +23,11 @@ in (alpha, duration): the duration is where the speed first vanishes (an event o
 integration), so it is one equation in alpha, the stopping length. Its root is bracketed on a
 geometric grid of alpha, found at a moderate accuracy by Brent's method and polished at full
 accuracy by the secant method; should that fail, Brent's method at full accuracy and then Newton's
-method on (alpha, duration) (MINPACK's hybrid method) take over. A launch over the same curve as
-its stop from a glide at ``a = 0`` is the stop reversed in time (:func:`mirrored_maneuver`).
+method on (alpha, duration) (MINPACK's hybrid method) take over. Those fallbacks serve the
+ill-conditioned stops (the speed grazing zero before the end) and cost many integrations at full
+accuracy, so a caller with other candidates may leave them out (``fallback=False``). A launch
+over the same curve as its stop from a glide at ``a = 0`` is the stop reversed in time
+(:func:`mirrored_maneuver`).
 
 The state integrated here is ``(p1, p2, a, b, s)``, ``s`` the arc length travelled.
 """
@@ -73,7 +76,8 @@ class ManeuverSolution:
     ``params`` are the free-control coefficients, ``duration`` the signed duration (negative for a
     launch, which is integrated backwards from its glide). ``residuals`` are the boundary
     conditions at the solution; ``min_singular_distance`` the closest approach of the mass to the
-    singular point.
+    singular point. ``deferred`` marks a failure solved with ``fallback=False`` where a bracket
+    of the stopping length held a stop that only the full-accuracy fallbacks could have found.
     """
 
     kind: str
@@ -86,6 +90,7 @@ class ManeuverSolution:
     min_singular_distance: float = math.inf
     nfev: int = 0
     basis: str = "ramp"
+    deferred: bool = False
 
     @property
     def end(self) -> np.ndarray:
@@ -473,6 +478,7 @@ def solve_stop(
     rtol: float = 1e-13,
     atol: float = 1e-14,
     singular_limit: float = 1e-3,
+    fallback: bool = True,
 ) -> ManeuverSolution:
     """Bring a glide to rest (or, with ``backward=True``, start it from rest).
 
@@ -497,6 +503,10 @@ def solve_stop(
         Locked mass position during the glide.
     speed : float
         Glide speed (> 0).
+    fallback : bool
+        Where the secant polish of a bracket's root fails, go on with Brent's method on the
+        bracket at full accuracy and then Newton's method (the default). False gives that bracket
+        up instead; a stop that needed them is then a failure with ``deferred=True``.
     """
     length = float(sum(ell for _, ell in legs))
     legs_spec = []
@@ -523,7 +533,7 @@ def solve_stop(
     u_nat = speed * speed / length
     stopper = _Stopper(params, y0, legs_spec, sign * 60.0 * t_nat, singular_limit * scale)
     nfev = 0
-    found = False
+    found = deferred = False
     best = None
     # One bracket per sign of alpha; prefer the sign that keeps the mass farther from the singular point.
     for direction in (1.0, -1.0):
@@ -535,6 +545,9 @@ def solve_stop(
         sol = (None, None)
         if root is not None:
             sol = _refined_stop(params, stopper, legs_spec, speed, length, root, a1, a2, rtol, atol)
+        if sol[0] is None and not fallback:
+            deferred = True
+            continue
         if sol[0] is None:
             # Brent's method at full accuracy on the bracket (cannot diverge), then Newton's method
             # on (alpha, tau) from the guess. The scan's accuracy can mislead where the stop is
@@ -567,6 +580,12 @@ def solve_stop(
             kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=nfev,
             message=(f"no {kind} of length {length:.6g} found from a glide on curvature {kappa:.6g}: every ramp "
                      "either never stops the sleigh or drives the mass into the singular point"),
+        )
+    if best is None and deferred:
+        return ManeuverSolution(
+            kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=nfev, deferred=True,
+            message=(f"the {kind} of length {length:.6g} is ill-conditioned: its bracketed root did not polish, "
+                     "and the full-accuracy fallbacks were not run (fallback=False)"),
         )
     if best is None:
         return ManeuverSolution(

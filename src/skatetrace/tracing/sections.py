@@ -33,9 +33,10 @@ from ..dynamics.integrator import load as load_integrator
 from ..dynamics.model import SleighParams, mass_energy, velocities
 from ..figures.figure import Figure, Section
 from ..figures.geometry import travel
-from ..processes import evaluated_ahead, run_jobs
+from ..processes import run_jobs
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
 from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
+from .search import search_placements
 from .shapes import ShapeIndex, exact_key
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
@@ -425,8 +426,13 @@ def trace_section(
     success. Of the placements whose stop and launch are both found
     and pass every check (the first that works and up to ``options.search`` tried after it), the
     one whose mass stays closest to the blade is kept (least largest ``|a|, |b|``, then least peak
-    kinetic energy of the mass); with ``options.placement="first"`` the first is. Never raises for
-    a section that cannot be traced: the result has ``success=False`` and the reason.
+    kinetic energy of the mass); with ``options.placement="first"`` the first is
+    (:func:`~skatetrace.tracing.search.search_placements`). The search runs first with the stops'
+    well-conditioned solves alone (``fallback=False`` of :func:`~skatetrace.tracing.maneuver.solve_stop`):
+    a stop that only the full-accuracy fallbacks find has its speed grazing zero before the end,
+    and those fallbacks are most of a long section's time where they fail. Only where no
+    placement works without them is the search run again with them. Never raises for a section
+    that cannot be traced: the result has ``success=False`` and the reason.
 
     Raises
     ------
@@ -450,51 +456,33 @@ def trace_section(
             for glide_ab, steady in glide_candidates(params, segs, g, ell, options):
                 yield g, kg, Lg, ell, glide_ab, steady
 
-    def solved(placement) -> tuple[SectionTrace, int]:
-        """The section traced with the glide at ``placement``, and the integrations that took."""
+    def solved(placement, fallback: bool) -> tuple[SectionTrace, int, bool]:
+        """The section traced with the glide at ``placement``, the integrations that took, and
+        whether it failed for want of the stops' full-accuracy fallbacks (``fallback=False``)."""
         g, kg, Lg, ell, glide_ab, steady = placement
         # an instant apex is no glide: the launch and the stop share the whole segment
         ell_g = ell if steady else 0.5 * Lg
         before, after = legs_from_apex(segs, g, ell_g)
         glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
                  "kappa": kg, "speed": options.speed}
-        stop, launch = _maneuvers(params, before, after, glide_ab, kw)
+        stop, launch = _maneuvers(params, before, after, glide_ab, dict(kw, fallback=fallback))
         used = stop.nfev + (launch.nfev if launch else 0)
-        return _assemble(params, section, options, curve_index, glide, before, stop, launch, used), used
+        trace = _assemble(params, section, options, curve_index, glide, before, stop, launch, used)
+        return trace, used, not trace.success and (stop.deferred or (launch is not None and launch.deferred))
 
-    nfev = attempts = extra = 0
-    first_failure = best = None
-
-    def wanted(placement) -> bool:
-        """Whether the search below would solve ``placement`` if it came next (it only ever wants fewer)."""
-        if best is None:
-            return attempts < options.max_placements
-        return extra < options.search and not _cannot_win(placement[4], best[0])
-
-    # The placements are solved in order; a long search (a section of a hundred pieces may try a
-    # hundred placements before one works) goes on in batches side by side, the same answers.
-    for placement, done in evaluated_ahead(solved, placements(), wanted, workers=options.workers):
-        if best is None and attempts >= options.max_placements:
-            break
-        if best is not None:
-            if extra >= options.search:
-                break
-            extra += 1
-            if _cannot_win(placement[4], best[0]):
-                continue  # counted as tried: the same placements are searched as without the shortcut
-        attempt, used = done
-        nfev += used
-        attempts += 1
-        if not attempt.success:
-            first_failure = first_failure or attempt
-        elif options.placement == "first":
-            return replace(attempt, nfev=nfev)
-        else:
-            key = (_reach(attempt), attempt.metrics["peak_mass_kinetic_energy"])
-            if best is None or _improves(key, best[0]):
-                best = (key, attempt)
-    if best is not None:
-        return replace(best[1], nfev=nfev)
+    # Well-conditioned placements first: every placement is solved without the stops' fallbacks
+    # (see solve_stop), which serve stops whose speed grazes zero before the end and cost most of
+    # a long section's time where they fail. Only a section that no placement traces without
+    # them is searched again with them; the placements that failed for another reason are not
+    # solved twice.
+    done = quick = search_placements(placements(), lambda placement: solved(placement, False), options, {})
+    if quick.best is None and quick.deferred:
+        full = search_placements(placements(), lambda placement: solved(placement, True), options,
+                                 quick.settled)
+        done = replace(full, nfev=quick.nfev + full.nfev)
+    if done.best is not None:
+        return replace(done.best, nfev=done.nfev)
+    attempts, first_failure = done.attempts, done.first_failure
     total = sum(1 for _ in placements()) if attempts >= options.max_placements else attempts
     tried = (f"tried {attempts} glide placements: every segment as the glide, every candidate mass position"
              if total == attempts else
@@ -505,32 +493,8 @@ def trace_section(
         success=False, status=first_failure.status,
         message=first_failure.message + f" ({tried})",
         curve_index=curve_index, section=section, params=params, speed=options.speed, glide=first_failure.glide,
-        residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=nfev,
+        residuals=first_failure.residuals, metrics=first_failure.metrics, nfev=done.nfev,
     )  # no phases: controls that failed a check are not handed on to be written or replayed
-
-
-# Placement keys this close (relative) are a tie, kept by the first placement: mirror-image
-# placements (a section symmetric under b -> -b, or two equal segments) have the same key but for
-# the rounding of their solves.
-_KEY_TIE = 1e-12
-
-
-def _improves(key: tuple[float, float], best: tuple[float, float]) -> bool:
-    """Whether placement ``key`` (reach, peak kinetic energy) beats ``best``: less reach, then less energy."""
-    for new, old in zip(key, best):
-        if abs(new - old) > _KEY_TIE * max(abs(old), abs(new)):
-            return new < old
-    return False
-
-
-def _cannot_win(glide_ab: tuple[float, float], best_key: tuple[float, float]) -> bool:
-    """Whether a placement with its apex at ``glide_ab`` is sure to reach farther than the best so far.
-
-    The apex is a sampled state of every trace through it (a phase boundary), so the reach of such
-    a trace is at least ``max(|a|, |b|)`` there. The margin covers the rounding of section times
-    when the apex is evaluated; a placement within it is solved, never skipped.
-    """
-    return max(abs(glide_ab[0]), abs(glide_ab[1])) > best_key[0] * (1.0 + 1e-9)
 
 
 def _maneuvers(params: SleighParams, before, after, glide_ab, kw) -> tuple[ManeuverSolution, ManeuverSolution | None]:
@@ -547,11 +511,6 @@ def _maneuvers(params: SleighParams, before, after, glide_ab, kw) -> tuple[Maneu
         if glide_ab[0] == 0.0 and same_legs(before, after):
             return stop, mirrored_maneuver(stop, before)
         return stop, solve_stop(params, before, glide_ab, 1.0, backward=True, **kw)
-
-
-def _reach(trace: SectionTrace) -> float:
-    """Largest distance of the mass from the contact point along the blade or across it."""
-    return max(trace.metrics["max_abs_a"], trace.metrics["max_abs_b"])
 
 
 def _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev) -> SectionTrace:
