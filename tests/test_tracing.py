@@ -580,3 +580,37 @@ def test_a_section_nothing_traces_solves_each_placement_once_with_the_fallbacks(
     assert settled and not set(settled) & {s[0] for s in full}
     assert [s[0] for s in full] == [s[0] for s in quick if s[3]]
     assert tr.nfev > 0
+
+
+def test_the_search_keeps_the_failures_it_need_not_solve_again_without_their_controls():
+    # search_placements on stand-in traces: the deferred failures are said and not kept, the others
+    # kept (without their controls) and taken from there by a second search, which solves the rest
+    from skatetrace.tracing.search import search_placements
+    from skatetrace.tracing.sections import SectionTrace
+
+    sec = _single(Segment(1.0, 1.0)).curves[0].sections()[0]
+
+    def trace(ok, reach=1.0):
+        return SectionTrace(success=ok, status=TraceStatus.SUCCESS if ok else TraceStatus.NO_STOP,
+                            message="ok" if ok else "no stop", curve_index=0, section=sec, params=P, speed=1.0,
+                            glide={}, phases=("controls",), metrics={"max_abs_a": reach, "max_abs_b": 0.0,
+                                                                     "peak_mass_kinetic_energy": 1.0})
+
+    placements = [(0, 0.0, 1.0, 0.1, (0.0, float(k)), True) for k in range(4)]
+    outcome = {0: (False, True), 1: (False, False), 2: (False, True), 3: (False, False)}  # (works, deferred)
+    solved = []
+
+    def solve(p):
+        solved.append(p[4][1])
+        works, deferred = outcome[int(p[4][1])]
+        return trace(works, reach=5.0), 10, deferred  # farther than every apex: none is pruned
+
+    opts = TraceOptions(workers=1)
+    first = search_placements(iter(placements), solve, opts, {})
+    assert first.best is None and first.deferred and first.attempts == 4 and first.nfev == 40
+    assert sorted(first.settled) == [1, 3] and all(t.phases == () for t in first.settled.values())
+    assert first.first_failure.phases == ("controls",)
+    outcome.update({0: (True, False), 2: (True, False)})  # with the fallbacks, 0 and 2 work
+    solved.clear()
+    again = search_placements(iter(placements), solve, opts, first.settled)
+    assert solved == [0.0, 2.0] and again.best is not None and again.nfev == 20 and not again.deferred

@@ -11,7 +11,7 @@ kinetic energy; a long search runs in batches side by side
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from ..processes import evaluated_ahead
@@ -28,8 +28,8 @@ class Searched:
 
     ``best`` is the placement kept (None if none worked), ``first_failure`` the first that failed,
     ``deferred`` whether any failed for want of the stops' fallbacks, and ``settled`` the failures
-    that did not (by their index in the order of the search), which a search with the fallbacks
-    would find again.
+    that did not (by their index in the order of the search, without their controls), which a
+    search with the fallbacks would find again.
     """
 
     best: SectionTrace | None
@@ -81,8 +81,8 @@ def search_placements(placements: Iterator, solve: Callable, options: TraceOptio
         if not attempt.success:
             first_failure = first_failure or attempt
             deferred = deferred or skipped
-            if not skipped:
-                failed[index] = attempt
+            if not skipped:  # kept without its controls (a failure is reported by its reason alone)
+                failed[index] = replace(attempt, phases=())
         elif options.placement == "first":
             best = ((), attempt)
             break
