@@ -275,3 +275,25 @@ def test_trace_passes_the_figure_unit_to_the_plots(tmp_path, monkeypatch, capsys
           "--no-viewer"])
     assert seen == {"unit": "m"}
     assert (tmp_path / "o" / "fit.png").stat().st_size > 5000
+
+
+def test_mass_path_colours_more_sections_than_the_colour_map_has_colours():
+    # a drawing of 416 lines joined at corners (hicolor's gvim icon at 6 m) crashed the command line
+    # after tracing it: BoundaryNorm had 416 bins for viridis's 256 colours
+    from types import SimpleNamespace
+
+    n = 416
+    section = np.repeat(np.arange(n), 3)
+    rng = np.random.default_rng(0)
+    report = SimpleNamespace(replay=SimpleNamespace(section=section, controls=rng.normal(size=(4, section.size))))
+    fig, ax = plt.subplots(figsize=(9, 7), layout="constrained")
+    artists = plotting.plot_mass_path(None, report, ax=ax, unit="m")
+    cbar = artists[-1]
+    paths = [ln for ln in ax.lines if ln.get_linestyle() == "-"]
+    assert len(paths) == n and cbar.norm.vmax == pytest.approx(n + 0.5)
+    colours = [to_rgba(ln.get_color()) for ln in paths]
+    assert colours == [to_rgba(cbar.cmap(cbar.norm(k))) for k in range(1, n + 1)]
+    assert len(set(colours)) > 200  # the colour map's own colours, spread over the sections in order
+    ticks = list(cbar.get_ticks())
+    assert ticks[0] == 1 and ticks[-1] == n
+    plt.close(fig)

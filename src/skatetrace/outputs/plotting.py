@@ -168,6 +168,8 @@ def plot_mass_path(trace: FigureTrace, report: VerificationReport, ax=None, unit
     sections = np.unique(rep.section)
     n = max(len(sections), 1)
     cmap = mpl.colormaps["viridis"]
+    if n > cmap.N:  # a colour a section: BoundaryNorm needs at least as many colours as sections
+        cmap = cmap.resampled(n)
     norm = mpl.colors.BoundaryNorm(np.arange(0.5, n + 1.5), cmap.N)
     artists = []
     starts, ends = [], []
