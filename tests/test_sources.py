@@ -368,14 +368,54 @@ def test_what_is_not_absorbed():
     # smooth at one end: a short piece continuing a line is part of a run, which the fit spans
     line = (LinePiece((0.0, 0.0), (6.0, 0.0)), LinePiece((6.0, 0.0), (6.0004, 0.0)), LinePiece((6.0004, 0.0), (6.0004, 6.0)))
     assert Drawing((DPath(line, False, "q"),)).absorbed(1e-3, 0.5)[1] == {}
-    # an open path's first and last pieces
-    ends = (LinePiece((0.0, 0.0), (0.0, 0.0004)), LinePiece((0.0, 0.0004), (6.0, 0.0004)), LinePiece((6.0, 0.0004), (6.0, 6.0)))
+    # an open path's first and last pieces longer than half the limit (dropping one would move the
+    # drawing by its whole length), or smooth at their inner end
+    ends = (LinePiece((0.0, 0.0), (0.0, 0.0006)), LinePiece((0.0, 0.0006), (6.0, 0.0006)),
+            LinePiece((6.0, 0.0006), (6.0, 6.0)))
     assert Drawing((DPath(ends, False, "r"),)).absorbed(1e-3, 0.5)[1] == {}
+    smooth = (LinePiece((-0.0004, 0.0), (0.0, 0.0)), LinePiece((0.0, 0.0), (6.0, 0.0)), LinePiece((6.0, 0.0), (6.0, 6.0)))
+    assert Drawing((DPath(smooth, False, "t"),)).absorbed(1e-3, 0.5)[1] == {}
+    # a path of one piece keeps it
+    assert Drawing((DPath((LinePiece((0.0, 0.0), (0.0, 0.0004)),), False, "u"),)).absorbed(1e-3, 0.5)[1] == {}
     # two tiny pieces in a row: the shorter goes, its neighbour (the other) stays
     pts = [(0.0, 0.0), (6.0, 0.0), (6.0, 3.0), (6.0003, 3.0), (6.0003, 3.0004), (6.0, 6.0), (0.0, 6.0), (0.0, 0.0)]
     pieces = tuple(LinePiece(a, b) for a, b in zip(pts[:-1], pts[1:]))
     absorbed, moves = Drawing((DPath(pieces, True, "s"),)).absorbed(1e-3, 0.5)
     assert moves == {"s": pytest.approx(1.5e-4)} and len(absorbed.paths[0].pieces) == 6
+
+
+def test_an_open_paths_tiny_end_piece_at_a_corner_is_dropped_moving_the_drawing_by_its_length():
+    # An open path that starts with a line of 0.08 mm at 6 m and turns a corner into the rest: alone
+    # between its start and the corner, that line was a section nothing traces ("no stop of length
+    # 4e-05 found", as in drawings of the Rust book's Ferris). An end piece has one neighbour to be
+    # absorbed into, so it is dropped: each of its points lies within its length of the corner,
+    # which stays.
+    from skatetrace.drawings.curves import Drawing, LinePiece, Path as DPath
+
+    pieces = (LinePiece((0.0, 0.0), (0.0, 0.0004)), LinePiece((0.0, 0.0004), (6.0, 0.0004)),
+              LinePiece((6.0, 0.0004), (6.0, 6.0)), LinePiece((6.0, 6.0), (6.0003, 6.0)))
+    drawing = Drawing((DPath(pieces, False, "r"),))
+    dropped, moves = drawing.absorbed(1e-3, 0.5)
+    assert moves == {"r": pytest.approx(4e-4)}
+    (p,) = dropped.paths
+    assert not p.closed and p.pieces == pieces[1:3]  # both ends dropped, the rest untouched
+    # two tiny pieces at an end: the shorter of them goes, the piece beside it stays
+    two = (LinePiece((0.0, 0.0), (0.0, 0.0002)), LinePiece((0.0, 0.0002), (0.0003, 0.0002)),
+           LinePiece((0.0003, 0.0002), (6.0, 0.0002)))
+    kept, moves = Drawing((DPath(two, False, "s"),)).absorbed(1e-3, 0.5)
+    assert moves == {"s": pytest.approx(2e-4)} and kept.paths[0].pieces == two[1:]
+    # end to end: an SVG of such a path is fitted within the tolerance and traced
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        svg = Path(tmp) / "tail.svg"
+        svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="-1 -1 8 8"><path d="M0 0 L0 0.00008 '
+                       'L6 0.00008 L6 6" stroke="black" fill="none"/></svg>')
+        r = resolve(str(svg), size="6m", tol="1mm")
+    assert any(n.startswith("absorbed the pieces between two corners") and "is dropped" in n for n in r.notes)
+    assert r.fit.success and r.fit.hausdorff <= 1e-3
+    lengths = [sum(p.segment.length for p in s.pieces) for c in r.figure.curves for s in c.sections()]
+    assert len(lengths) == 2 and min(lengths) > 1e-3
 
 
 def test_a_drawing_with_a_tiny_closing_piece_is_fitted_without_it_and_within_the_tolerance():

@@ -402,11 +402,13 @@ class Drawing:
         closing line of a millimetre in an icon scaled to metres). Its ends are merged at its
         midpoint: the previous piece's end and the next piece's start move there
         (:class:`ShiftedEndPiece`: their tangents and curvatures at both ends kept), so no point
-        of the drawing moves by more than half the piece's length; that is returned per path (its
-        largest), with the paths changed. A join turning by more than ``corner_deg`` degrees is a
-        corner. Left as they are: a piece next to one absorbed, a path of fewer than three
-        pieces, an open path's first and last pieces, and a piece whose absorption would fold a
-        neighbour (its speed below half its smallest).
+        of the drawing moves by more than half the piece's length. An open path's first or last
+        piece shorter than ``limit / 2`` with a corner at its inner end is dropped: every point of
+        it lies within its length of that end, which stays. The largest move is returned per path,
+        with the paths changed. A join turning by more than ``corner_deg`` degrees is a corner.
+        Left as they are: a piece next to one absorbed or dropped, a path of one piece (or of two,
+        for absorbing), and a piece whose absorption would fold a neighbour (its speed below half
+        its smallest).
         """
         out, moved = [], {}
         for p in self.paths:
@@ -449,19 +451,24 @@ def _absorbed(path: Path, limit: float, corner_deg: float) -> tuple[Path, float]
     """:meth:`Drawing.absorbed` on one path: the path and the largest distance a point of it moved."""
     pieces = list(path.pieces)
     n = len(pieces)
-    if n < 3 or not limit > 0.0:
+    if n < 2 or not limit > 0.0:
         return path, 0.0
     lengths = [piece_length(pc) for pc in pieces]
     start = [np.zeros(2) for _ in range(n)]  # how far each kept piece's start and end move
     end = [np.zeros(2) for _ in range(n)]
-    gone: set[int] = set()
+    gone: dict[int, float] = {}  # the pieces absorbed or dropped, and how far that moves the drawing
     for i in sorted(range(n), key=lambda k: lengths[k]):
         if lengths[i] >= limit:
             break
         if not path.closed and i in (0, n - 1):
+            # an open path's end piece: dropped, where it is short enough and turns a corner into the rest
+            inner = 1 if i == 0 else n - 2
+            turn = _turn_deg(pieces[0], pieces[1]) if i == 0 else _turn_deg(pieces[n - 2], pieces[n - 1])
+            if lengths[i] < 0.5 * limit and inner not in gone and turn > corner_deg:
+                gone[i] = lengths[i]
             continue
         prev, nxt = (i - 1) % n, (i + 1) % n
-        if gone & {prev, nxt}:
+        if n < 3 or gone.keys() & {prev, nxt}:
             continue  # a neighbour of an absorbed piece (a piece shared by two absorbed moves at both ends)
         if min(_turn_deg(pieces[prev], pieces[i]), _turn_deg(pieces[i], pieces[nxt])) <= corner_deg:
             continue  # smooth at one end: part of a run, which the fit spans
@@ -475,7 +482,7 @@ def _absorbed(path: Path, limit: float, corner_deg: float) -> tuple[Path, float]
             continue
         end[prev] = end[prev] + shifted_end
         start[nxt] = start[nxt] + shifted_start
-        gone.add(i)
+        gone[i] = 0.5 * lengths[i]
     if not gone:
         return path, 0.0
     kept = []
@@ -484,4 +491,4 @@ def _absorbed(path: Path, limit: float, corner_deg: float) -> tuple[Path, float]
             continue
         moved = bool(np.any(start[k]) or np.any(end[k]))
         kept.append(ShiftedEndPiece(pc, tuple(map(float, end[k])), tuple(map(float, start[k]))) if moved else pc)
-    return Path(tuple(kept), path.closed, path.name), max(0.5 * lengths[i] for i in gone)
+    return Path(tuple(kept), path.closed, path.name), max(gone.values())

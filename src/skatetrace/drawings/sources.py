@@ -279,7 +279,8 @@ def _absorbed_fit(fitted: Drawing, fit_tol: float, gaps: dict[str, float], corne
 
 def _absorbed_note(moves: dict[str, float], corners: str, unit: str) -> str:
     return (f"absorbed the pieces between two {corners} shorter than {2.0 * ABSORB_SHARE:.3g} x the tolerance into "
-            f"their neighbours, moving the drawing by up to {max(moves.values()):.3g} {unit} (the fit's bound "
+            f"their neighbours (an open path's end piece at such a corner, shorter than {ABSORB_SHARE:.3g} x it, "
+            f"is dropped), moving the drawing by up to {max(moves.values()):.3g} {unit} (the fit's bound "
             f"includes it): {', '.join(list(moves)[:5])}{' ...' if len(moves) > 5 else ''}")
 
 
