@@ -87,7 +87,9 @@ class TraceOptions:
         Integration tolerances of the manoeuvres.
     placement : {"least-reach", "first"}
         Which of the glide placements that trace the section to keep: the one whose mass stays
-        closest to the blade (default) or the first that works.
+        closest to the blade (default) or the first that works. Either is chosen among the
+        placements whose stops need no full-accuracy fallback, where one works (see
+        :func:`trace_section`).
     search : int
         With ``"least-reach"``: how many more placements to try after the first that works (in
         the order of :func:`trace_section`). Sections of a few pieces have fewer placements than
