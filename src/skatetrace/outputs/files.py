@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["atomic_write", "write_atomically", "dumps_json", "json_safe", "file_mode", "record_writes",
-           "stage_writes", "staged"]
+__all__ = ["atomic_write", "write_atomically", "temporary_pattern", "dumps_json", "json_safe", "file_mode",
+           "record_writes", "stage_writes", "staged"]
 
 # The callbacks told of every file written atomically (see record_writes), innermost last.
 _RECORDERS: contextvars.ContextVar[tuple[Callable[[Path], None], ...]] = contextvars.ContextVar(
@@ -107,6 +107,20 @@ def file_mode() -> int:
     return 0o666 & ~_umask()
 
 
+def temporary_pattern(path: str | Path) -> str:
+    """The glob pattern of the temporary files :func:`write_atomically` writes next to ``path``.
+
+    A process killed between writing one and renaming it onto ``path`` leaves it there.
+    """
+    prefix, suffix = _temporary_affixes(Path(path))
+    return f"{prefix}*{suffix}"
+
+
+def _temporary_affixes(path: Path) -> tuple[str, str]:
+    """The prefix and suffix of :func:`write_atomically`'s temporary file for ``path`` (its suffix kept)."""
+    return f".{path.stem}.", f".partial{path.suffix.lower()}"
+
+
 def write_atomically(path: str | Path, write: Callable[[Path], None]) -> None:
     """Have ``write(tmp)`` write a temporary file next to ``path``, then rename it onto ``path``.
 
@@ -118,7 +132,8 @@ def write_atomically(path: str | Path, write: Callable[[Path], None]) -> None:
     path = Path(path)
     target = _target(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix.lower()}", dir=target.parent)
+    prefix, suffix = _temporary_affixes(path)
+    fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=target.parent)
     os.close(fd)
     try:
         write(Path(tmp))

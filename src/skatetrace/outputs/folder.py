@@ -20,7 +20,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from ..errors import SkatetraceError
-from .files import atomic_write, dumps_json, record_writes, stage_writes
+from .files import atomic_write, dumps_json, record_writes, stage_writes, temporary_pattern
 
 __all__ = ["MANIFEST", "STAGING_PREFIX", "check_finished", "check_output_folder", "check_output_file", "output_path",
            "OutputFolder", "adopt"]
@@ -32,7 +32,7 @@ _MANIFEST_SCHEMA = "skatetrace.manifest/1"
 STAGING_PREFIX = ".skatetrace-run."
 #: The temporary file of a manifest being written (``write_atomically``'s name for it): a run killed
 #: in that instant leaves it beside the manifest.
-_MANIFEST_PARTIAL = f".{Path(MANIFEST).stem}.*.partial{Path(MANIFEST).suffix}"
+_MANIFEST_PARTIAL = temporary_pattern(MANIFEST)
 
 
 
