@@ -17,7 +17,7 @@ from .corners import corner_join
 from ..figures.figure import Join
 from ..figures.geometry import Pose, Segment
 
-__all__ = ["Knot", "Where", "FittedRun", "FitStatus", "PathFit", "DrawingFit"]
+__all__ = ["Knot", "Where", "FittedRun", "FitStatus", "PathFit", "DrawingFit", "gathered"]
 
 
 class Knot(NamedTuple):
@@ -168,3 +168,16 @@ class DrawingFit:
     def status(self) -> FitStatus:
         bad = [p.status for p in self.paths if not p.success]
         return bad[0] if bad else FitStatus.SUCCESS
+
+
+def gathered(paths, *, name: str, tol: float) -> DrawingFit:
+    """The fit of a drawing made of its paths' fits (in the drawing's order), fitted within ``tol``."""
+    paths = tuple(paths)
+    worst = max(range(len(paths)), key=lambda i: paths[i].hausdorff)
+    bad = [f"path {i} ({f.name!r}): {f.message}" for i, f in enumerate(paths) if not f.success]
+    message = (f"{len(paths)} paths, Hausdorff distance <= {paths[worst].hausdorff:.3g} (tol {tol:.3g})"
+               if not bad else "; ".join(bad))
+    return DrawingFit(success=not bad, message=message, paths=paths, hausdorff=paths[worst].hausdorff,
+                      hausdorff_sampled=max(f.hausdorff_sampled for f in paths),
+                      n_arcs=sum(f.n_arcs for f in paths), n_lines=sum(f.n_lines for f in paths),
+                      worst_path=worst, name=name)

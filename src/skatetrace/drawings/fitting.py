@@ -38,7 +38,7 @@ from .biarcs import _biarc, _chain_poses
 from .certify import _FAIL, _Cert, _certify
 from .corners import _wrap
 from .curves import Drawing, Path, Piece, _col, _gl_lengths, curvature, piece_length
-from .fit_results import DrawingFit, FitStatus, FittedRun, Knot, PathFit, Where
+from .fit_results import DrawingFit, FitStatus, FittedRun, Knot, PathFit, Where, gathered
 from .splitting import Run, _direction, _split
 from ..errors import FitError
 from ..figures.geometry import Pose, Segment
@@ -741,12 +741,4 @@ def fit_drawing(drawing: Drawing, tol: float, *, method: str = "greedy", corner_
     fits = tuple(_fit_path(p, tol, method, corner_tol_deg, soft_corners, (before[i], total))
                  for i, p in enumerate(drawing.paths))
     _PROGRESS.report("fitting", total, total)
-    worst = max(range(len(fits)), key=lambda i: fits[i].hausdorff)
-    bad = [f"path {i} ({f.name!r}): {f.message}" for i, f in enumerate(fits) if not f.success]
-    success = not bad
-    message = (f"{len(fits)} paths, Hausdorff distance <= {fits[worst].hausdorff:.3g} (tol {tol:.3g})"
-               if success else "; ".join(bad))
-    return DrawingFit(success=success, message=message, paths=fits, hausdorff=fits[worst].hausdorff,
-                      hausdorff_sampled=max(f.hausdorff_sampled for f in fits),
-                      n_arcs=sum(f.n_arcs for f in fits), n_lines=sum(f.n_lines for f in fits),
-                      worst_path=worst, name=drawing.name)
+    return gathered(fits, name=drawing.name, tol=tol)

@@ -238,14 +238,36 @@ def _with_gaps(fit, gaps: dict[str, float], tol: float):
     """The fit of paths closed (or with tiny pieces absorbed) moving them by up to ``gaps`` (by name), with its
     bounds to the drawing as given: each such path's distances plus its gap (no point of it moved further),
     and the tolerance ``tol``."""
+    from .fit_results import gathered
+
     if not gaps:
         return fit
-    paths = tuple(replace(pf, hausdorff=pf.hausdorff + gaps.get(pf.name, 0.0),
-                          hausdorff_sampled=pf.hausdorff_sampled + gaps.get(pf.name, 0.0), tol=tol)
-                  for pf in fit.paths)
-    worst = max(range(len(paths)), key=lambda i: paths[i].hausdorff)
-    return replace(fit, paths=paths, hausdorff=paths[worst].hausdorff, worst_path=worst,
-                   hausdorff_sampled=max(pf.hausdorff_sampled for pf in paths))
+    return gathered((replace(pf, hausdorff=pf.hausdorff + gaps.get(pf.name, 0.0),
+                             hausdorff_sampled=pf.hausdorff_sampled + gaps.get(pf.name, 0.0), tol=tol)
+                     for pf in fit.paths), name=fit.name, tol=tol)
+
+
+def _with_specks(fit, drawing: Drawing, specks: dict, tol: float, method: str):
+    """The fit of ``drawing``: its specks' circles (by path index) among the other paths' ``fit`` (None if
+    every path is a speck), in the drawing's order, within the tolerance ``tol``."""
+    from .fit_results import gathered
+    from .specks import speck_fit
+
+    if not specks:
+        return fit
+    others = iter(fit.paths if fit is not None else ())
+    return gathered((speck_fit(p, specks[i], tol, method) if i in specks else next(others)
+                     for i, p in enumerate(drawing.paths)), name=drawing.name, tol=tol)
+
+
+def _specks_note(drawing: Drawing, specks: dict, unit: str) -> str:
+    from .specks import SPECK_RADIUS
+
+    names = [drawing.paths[i].name for i in specks]
+    return (f"traced {len(specks)} path(s) too small to trace as drawn (within {SPECK_RADIUS:g} x the tolerance of "
+            f"their centres, their pieces too short to launch and stop on) as the circles they lie within "
+            f"{ABSORB_SHARE:.3g} x the tolerance of (up to {max(s.bound for s in specks.values()):.3g} {unit} "
+            f"away, certified; the fit's bound includes it): {', '.join(names[:5])}{' ...' if len(names) > 5 else ''}")
 
 
 def _kink_corner_deg(drawing: Drawing, tol: float) -> float:
@@ -284,26 +306,19 @@ def _absorbed_note(moves: dict[str, float], corners: str, unit: str) -> str:
             f"includes it): {', '.join(list(moves)[:5])}{' ...' if len(moves) > 5 else ''}")
 
 
-def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float, exact=None) -> Resolved:
-    from .fitting import fit_drawing
-    from .to_figure import figure_from_fit
-    from ..dynamics.presets import skater_params
+def _arc_fit(drawing: Drawing, tol_v: float, arc_mode: bool, method: str, unit: str, notes: list):
+    """The arc fit of ``drawing`` within ``tol_v``, its bound to the drawing as given; what was done to
+    make it fit is appended to ``notes``.
 
-    value, unit = _size(size)
-    notes = list(drawing.notes)
-    if value is not None:
-        drawing = drawing.scaled_to(value, unit)
-        notes.append(f"scaled to {value:g} {unit} across")
-    else:
-        unit = "model"
-        notes.append(f"kept the drawing's own units ({drawing.size():.4g} across) as model units")
-    fsize = drawing.size()
-    if value is None:
-        _check_size(fsize, f"the drawing {drawing.name!r}, in its own units,")
-    tol_v = _tol(tol, unit, fsize, floor=MIN_REL_TOL)
+    Raises
+    ------
+    SkatetraceError
+        Where no attempt fits.
+    """
+    from .fitting import fit_drawing
+
     # In arc mode a path drawn closed but whose ends miss by less than the tolerance is closed
     # exactly; the fit then gets what is left of the tolerance, and its bound is to the drawing as given.
-    arc_mode = exact is None or exact is False
     fitted, gaps = drawing.closed_within(tol_v) if arc_mode else (drawing, {})
     fit_tol = tol_v - max(gaps.values(), default=0.0)
     if gaps:
@@ -351,6 +366,34 @@ def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height:
     if not fit.success:
         raise SkatetraceError(f"could not fit {drawing.name!r} within {tol_v:.3g}: {fit.message}")
     fit = _with_gaps(fit, gaps, tol_v)
+    return fit
+
+
+def _drawing(drawing: Drawing, size, tol, method: str, body_mass: float, height: float, exact=None) -> Resolved:
+    from .specks import find_specks
+    from .to_figure import figure_from_fit
+    from ..dynamics.presets import skater_params
+
+    value, unit = _size(size)
+    notes = list(drawing.notes)
+    if value is not None:
+        drawing = drawing.scaled_to(value, unit)
+        notes.append(f"scaled to {value:g} {unit} across")
+    else:
+        unit = "model"
+        notes.append(f"kept the drawing's own units ({drawing.size():.4g} across) as model units")
+    fsize = drawing.size()
+    if value is None:
+        _check_size(fsize, f"the drawing {drawing.name!r}, in its own units,")
+    tol_v = _tol(tol, unit, fsize, floor=MIN_REL_TOL)
+    arc_mode = exact is None or exact is False
+    # In arc mode a path too small to trace as drawn, near a circle, is traced as that circle.
+    specks = find_specks(drawing, tol_v, ABSORB_SHARE * tol_v) if arc_mode else {}
+    if specks:
+        notes.append(_specks_note(drawing, specks, unit))
+    rest = tuple(p for i, p in enumerate(drawing.paths) if i not in specks)
+    fit = _arc_fit(replace(drawing, paths=rest), tol_v, arc_mode, method, unit, notes) if rest else None
+    fit = _with_specks(fit, drawing, specks, tol_v, method)
     params = skater_params(body_mass, height) if unit == "m" else SleighParams()
     notes.append(f"arc mode: {fit.n_arcs} arcs and {fit.n_lines} lines within {fit.hausdorff:.3g} "
                  f"(certified; tolerance {tol_v:.3g} {unit})")
