@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import pathlib
+import re
 import warnings
 
 import numpy as np
@@ -327,6 +328,24 @@ def test_no_warning_escapes_the_svg_parser_but_becomes_a_note():
 def test_svg_errors(source, match):
     with pytest.raises(DrawingError, match=match):
         read_svg(source)
+
+
+@pytest.mark.parametrize("nothing, note", [
+    # a graph layout's invisible node (Graphviz writes these; the Rust book's trpl15-04.svg has one)
+    ('<ellipse id="z" cx="270" cy="-46" rx="0" ry="0"/>', r"skipped 1 element\(s\) of zero size, which SVG does not "
+                                                           r"draw: <ellipse id='z'>"),
+    ('<circle id="z" cx="1" cy="1" r="0"/>', r"of zero size.*<circle id='z'>"),
+    ('<rect id="z" x="1" y="1" width="0" height="3"/>', r"of zero size.*<rect id='z'>"),
+    ('<path id="z" d="M 5 5 L 5 5 Z"/>', r"skipped 1 element\(s\) of only zero-length segments.*<path id='z'>"),
+])
+def test_an_element_that_draws_nothing_is_skipped_where_anything_else_is_drawn(nothing, note):
+    # SVG draws nothing for a zero size (and a point for a path of zero length): the drawing is the rest,
+    # with a note; alone, such an element is still an error (test_svg_errors)
+    d = read_svg(svg(f'<path id="line" d="M 0 0 L 10 0"/>{nothing}'))
+    assert [p.name for p in d.paths] == ["line"]
+    assert sum(bool(re.search(note, n)) for n in d.notes) == 1, d.notes
+    with pytest.raises(DrawingError, match="has only zero-length segments|has no extent"):
+        read_svg(svg(nothing))
 
 
 def test_svg_error_types():

@@ -26,20 +26,23 @@ the ice with :meth:`Drawing.scaled_to` and a size from :func:`~skatetrace.drawin
 
 Exactness
 ---------
-SVG segments become pieces with exact derivatives: ``L``/``H``/``V``/``Z`` lines become
-:class:`LinePiece`, ``Q``/``T``/``C``/``S`` :class:`BezierPiece`, ``A`` :class:`EllipticArcPiece`.
-svgelements' geometry is taken untransformed, and the composed affine transform (and the y flip)
-is applied to the parameters themselves: an affine map of a Bézier is the Bézier of the mapped
-control points, and an affine map of an elliptic arc is an elliptic arc whose axes come from the
-singular value decomposition of the map (svgelements' own arc transform keeps the axes
-perpendicular, which a rotated ellipse under a non-uniform scale does not).
+SVG segments become pieces with exact derivatives (:mod:`.svg_pieces`): ``L``/``H``/``V``/``Z`` lines become
+:class:`~skatetrace.drawings.curves.LinePiece`, ``Q``/``T``/``C``/``S``
+:class:`~skatetrace.drawings.curves.BezierPiece`, ``A``
+:class:`~skatetrace.drawings.curves.EllipticArcPiece`. svgelements' geometry is taken untransformed, and the
+composed affine transform (and the y flip) is applied to the parameters themselves: an affine map of a Bézier is the
+Bézier of the mapped control points, and an affine map of an elliptic arc is an elliptic arc whose axes come from the
+singular value decomposition of the map (svgelements' own arc transform keeps the axes perpendicular, which a rotated
+ellipse under a non-uniform scale does not).
 
 Degenerate input
 ----------------
 Exactly zero-length segments are dropped, a zero-radius arc is a line (as SVG says), a Bézier with a
 zero-length handle is kept (its derivative vanishes there), each with a note. An element of only
-zero-length segments or of zero size, non-finite or huge (beyond ``MAX_COORD``) coordinates, a
-singular transform, malformed XML, path data or transforms, refused XML and missing files raise
+zero-length segments (it draws a point) or of zero size (``r="0"``, which SVG does not draw, as graph
+layouts write for invisible nodes) is skipped with a note where anything else is drawn, and raises
+where nothing is. Non-finite or huge (beyond ``MAX_COORD``) coordinates, a singular transform,
+malformed XML, path data or transforms, refused XML and missing files raise
 :class:`DrawingError` with the file, element or line and what would be accepted.
 """
 
@@ -56,10 +59,11 @@ import svgelements as se
 from defusedxml import DefusedXmlException, EntitiesForbidden, ExternalReferenceForbidden
 from defusedxml.ElementTree import fromstring as _safe_fromstring
 
-from .curves import BezierPiece, Drawing, EllipticArcPiece, LinePiece, Path, Piece
+from .curves import Drawing, Path, Piece
 from .files import file_stem, read_bytes, shorten
-from .lengths import CLOSE_TOL, MAX_COORD, extent
+from .lengths import CLOSE_TOL, extent
 from .svg_entities import inline_entities
+from .svg_pieces import SAMPLES, is_zero_length, same_point, segment_notes, segment_points, svg_piece
 from .svg_style import (MAX_ELEMENTS, Placed, Visibility, check_transforms, expand, local_tag,
                         styled_names, unapplied_rules, visibility)
 from ..errors import DrawingError
@@ -70,7 +74,6 @@ SVG_SUFFIXES = (".svg",)
 """File suffixes of SVG drawings (:func:`skatetrace.drawings.load.load_drawing` reads them with :func:`read_svg`)."""
 
 _FLIP = np.array([[1.0, 0.0], [0.0, -1.0]])
-_SAMPLES = np.linspace(0.0, 1.0, 17)
 _PPI = 96.0  # CSS pixels per inch: lengths in units become user units at this rate, as in SVG
 _EXTENT = {"rect": "width and height > 0", "circle": "r > 0", "ellipse": "rx and ry > 0",
            "polyline": "points", "polygon": "points", "line": "x1, y1, x2, y2", "path": "d"}
@@ -164,28 +167,30 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     for p in placed:
         if p.skipped is None:
             units.setdefault(id(_unit_of(p)), len(units) + 1)
-    entries, unpainted, hidden, skipped = [], [], [], []
+    entries, unpainted, hidden, skipped, empty = [], [], [], [], []
     for p, shape, containers in _match(placed, shapes, styled):
         if p is not None and p.skipped is not None:
             skipped.append(f"{_describe(p.element)} ({p.skipped})")
             continue
         base, label = _names(p, shape, units)
         where = f"{origin}: {label}"
-        if shape is None:  # svgelements dropped it: it has no extent
-            tag = p.tag
-            if p.declared_hidden:
+        try:
+            if shape is None:  # svgelements dropped it: it has no extent
+                if p.declared_hidden:
+                    hidden.append(label)
+                    continue
+                if p.tag in ("path", "polyline", "polygon"):
+                    notes.append(f"{where} is empty and was skipped")
+                    continue
+                _no_extent(where, p.tag, p.element.attrib)
+            shown = visibility([document.values, *(c.values for c in containers), shape.values])
+            if shown == Visibility.HIDDEN:
                 hidden.append(label)
                 continue
-            if tag in ("path", "polyline", "polygon"):
-                notes.append(f"{where} is empty and was skipped")
-                continue
-            _no_extent(where, tag, p.element.attrib)
-        chain = [document.values, *(c.values for c in containers), shape.values]
-        shown = visibility(chain)
-        if shown == Visibility.HIDDEN:
-            hidden.append(label)
+            segments = _segments(shape, p, where, notes)
+        except _Nothing as exc:  # SVG draws nothing for it: an error only if nothing else is drawn
+            empty.append((label, exc))
             continue
-        segments = _segments(shape, p, where, notes)
         if not any(not isinstance(s, se.Move) for s in segments):
             notes.append(f"{where} is empty and was skipped")
             continue
@@ -209,6 +214,11 @@ def read_svg(source: str | os.PathLike) -> Drawing:
     elif unpainted:
         notes.append(f"{origin}: nothing in the drawing is painted (fill and stroke none); its geometry is read anyway")
         entries = unpainted
+    if empty and entries:
+        notes.append(f"{origin}: skipped {len(empty)} element(s) of zero size, which SVG does not draw: "
+                     f"{', '.join(label for label, _ in empty[:5])}{' ...' if len(empty) > 5 else ''}")
+    elif empty:
+        raise empty[0][1]
     if not entries and hidden:
         raise DrawingError(f"every drawable element of {origin} is hidden (display:none or visibility:hidden): "
                            f"{', '.join(hidden[:5])}")
@@ -530,9 +540,13 @@ def _segments(shape, p: Placed | None, where: str, notes: list[str]) -> list:
                            "(e.g. a circle needs cx, cy and r)") from exc
 
 
+class _Nothing(DrawingError):
+    """An element SVG draws nothing for (a zero size, a point): skipped where anything else is drawn."""
+
+
 def _no_extent(where: str, tag: str, attributes) -> None:
     shown = {k: v for k, v in attributes.items() if k in ("x", "y", "width", "height", "cx", "cy", "r", "rx", "ry")}
-    raise DrawingError(f"{where} has no extent: its size is zero, missing or unreadable ({shown or 'none given'}); "
+    raise _Nothing(f"{where} has no extent: its size is zero, missing or unreadable ({shown or 'none given'}); "
                        f"SVG draws nothing for it: give it {_EXTENT.get(tag, 'a size')} or remove it")
 
 
@@ -547,7 +561,7 @@ def _parse_d(d: str, where: str, notes: list[str]) -> list:
         warnings.simplefilter("always")
         try:
             segments = list(_PathData(d))
-            complete = all(isinstance(v, (int, float)) for s in segments for q in _points(s) for v in (q.x, q.y))
+            complete = all(isinstance(v, (int, float)) for s in segments for q in segment_points(s) for v in (q.x, q.y))
         except _LIBRARY_ERRORS:
             complete = False
     if not complete:
@@ -557,29 +571,6 @@ def _parse_d(d: str, where: str, notes: list[str]) -> list:
     for message in dict.fromkeys(str(w.message) for w in caught):
         notes.append(f"{where}: {message}")
     return segments
-
-
-def _points(segment) -> list:
-    """The defining points of a segment (an arc's start, end, centre and axis points)."""
-    if isinstance(segment, se.Move):
-        return [segment.end]
-    if isinstance(segment, se.CubicBezier):
-        return [segment.start, segment.control1, segment.control2, segment.end]
-    if isinstance(segment, se.QuadraticBezier):
-        return [segment.start, segment.control, segment.end]
-    if isinstance(segment, se.Arc) and not hasattr(segment, "svg_parameters"):
-        return [segment.start, segment.end, segment.center, segment.prx, segment.pry]
-    return [segment.start, segment.end]
-
-
-def _xy(A: np.ndarray, b: np.ndarray, point) -> tuple[float, float]:
-    p = A @ np.array([float(point[0]), float(point[1])]) + b
-    return float(p[0]) + 0.0, float(p[1]) + 0.0  # + 0.0: no -0.0 from the y flip
-
-
-def _same(p, q) -> bool:
-    """Exactly the same point (svgelements' own ``==`` allows 1e-12)."""
-    return float(p[0]) == float(q[0]) and float(p[1]) == float(q[1])
 
 
 class _PathData(se.Path):
@@ -598,156 +589,18 @@ class _PathData(se.Path):
         return self
 
 
-def _arc_geometry(arc) -> tuple[np.ndarray, float, float, float, float, float] | None:
-    """``(c, rx, ry, phi, t0, dt)`` of an arc: ``point(s) = c + R(phi) (rx cos t, ry sin t)``,
-    ``t = t0 + s dt``; None for a zero radius (SVG draws a straight line).
-
-    From path data: the endpoint-to-centre conversion of SVG's implementation notes, with the
-    radii scaled up to fit exactly when they are too small (then the centre is the midpoint of the
-    chord, exactly). From svgelements' shapes (rounded rects, circles, ellipses): its centre and
-    axis points, both ends' parameters from ``atan2`` in the ellipse's frame and the sweep within a
-    turn of svgelements' (which fixes direction and size).
-    """
-    start = np.array([float(arc.start[0]), float(arc.start[1])])
-    end = np.array([float(arc.end[0]), float(arc.end[1])])
-    if hasattr(arc, "svg_parameters"):
-        rx, ry, rotation, large, sweep = arc.svg_parameters
-        rx, ry = abs(float(rx)), abs(float(ry))
-        if rx == 0 or ry == 0:
-            return None
-        phi = math.radians(float(rotation) % 360.0)
-        cos, sin = math.cos(phi), math.sin(phi)
-        dx, dy = (start - end) / 2
-        xp, yp = cos * dx + sin * dy, -sin * dx + cos * dy
-        lam = (xp / rx) ** 2 + (yp / ry) ** 2
-        if lam >= 1:
-            rx, ry, co = rx * math.sqrt(lam), ry * math.sqrt(lam), 0.0
-        else:
-            co = math.sqrt(1.0 - lam) / math.sqrt(lam) if lam > 0 else math.inf
-            co = -co if bool(large) == bool(sweep) else co
-        cxp, cyp = co * rx * yp / ry, -co * ry * xp / rx
-        c = np.array([cos * cxp - sin * cyp, sin * cxp + cos * cyp]) + (start + end) / 2
-        t0 = math.atan2((yp - cyp) / ry, (xp - cxp) / rx)
-        dt = math.atan2((-yp - cyp) / ry, (-xp - cxp) / rx) - t0
-        if sweep and dt < 0:
-            dt += 2 * math.pi
-        elif not sweep and dt > 0:
-            dt -= 2 * math.pi
-        return c, rx, ry, phi, t0, dt
-    c = np.array([float(arc.center[0]), float(arc.center[1])])
-    u = np.array([float(arc.prx[0]), float(arc.prx[1])]) - c
-    v = np.array([float(arc.pry[0]), float(arc.pry[1])]) - c
-    rx, ry, phi = float(np.hypot(*u)), float(np.hypot(*v)), math.atan2(u[1], u[0])
-    if rx == 0 or ry == 0:
-        return None
-    e, n = np.array([math.cos(phi), math.sin(phi)]), np.array([-math.sin(phi), math.cos(phi)])
-    t0, t1 = (math.atan2(float((p - c) @ n) / ry, float((p - c) @ e) / rx) for p in (start, end))
-    dt = t1 - t0
-    dt += 2 * math.pi * round((float(arc.sweep) - dt) / (2 * math.pi))
-    return c, rx, ry, phi, t0, dt
-
-
-def _arc_piece(arc, geometry, A: np.ndarray, b: np.ndarray, where: str) -> EllipticArcPiece:
-    """The exact image under ``x -> A x + b`` of an arc of :func:`_arc_geometry`.
-
-    The arc is ``point(t) = c + R(phi) (rx cos t, ry sin t)``, ``t`` from ``t0`` by ``dt``. The image
-    is ``A c + b + M (cos t, sin t)`` with ``M = A R(phi) diag(rx, ry)``. Write ``M = U S V^T`` with
-    ``U`` and ``V`` rotations (the reflection, if any, goes into the sign ``s`` of the second
-    singular value); then ``V^T (cos t, sin t) = (cos(t - a), sin(t - a))`` and a negative second
-    radius is the same ellipse run with the angle negated.
-    """
-    c, rx, ry, phi, t0, dt = geometry
-    if not all(math.isfinite(v) for v in (*c, rx, ry, phi, t0, dt)):
-        ends = f"{_xy(np.eye(2), np.zeros(2), arc.start)} to {_xy(np.eye(2), np.zeros(2), arc.end)}"
-        raise DrawingError(f"{where}: the elliptical arc from {ends} cannot be evaluated in double precision "
-                           "(it has no finite centre and radii): give it radii of a size comparable to the distance "
-                           "between its end points")
-    R = np.array([[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]])
-    M = A @ R @ np.diag([rx, ry])
-    if not np.all(np.isfinite(M)):
-        raise DrawingError(f"{where}: an elliptical arc's radii overflow under its transform; rescale the drawing")
-    U, singular, Vt = np.linalg.svd(M)
-    su, sv = np.sign(np.linalg.det(U)), np.sign(np.linalg.det(Vt))
-    U = U @ np.diag([1.0, su])
-    Vt = np.diag([1.0, sv]) @ Vt
-    sign = float(su * sv)
-    alpha = math.atan2(Vt[0, 1], Vt[0, 0])
-    return EllipticArcPiece(
-        centre=_xy(A, b, c), rx=float(singular[0]), ry=float(singular[1]),
-        rotation=math.atan2(U[1, 0], U[0, 0]), theta0=sign * (t0 - alpha), dtheta=sign * dt,
-    )
-
-
-def _is_zero_length(segment) -> bool:
-    points = _points(segment)[:2] if isinstance(segment, se.Arc) else _points(segment)
-    return all(_same(q, points[0]) for q in points)
-
-
-def _is_flat_arc(segment) -> bool:
-    """An arc with a zero radius: SVG draws a straight line."""
-    if not isinstance(segment, se.Arc):
-        return False
-    try:
-        return _arc_geometry(segment) is None
-    except (ArithmeticError, ValueError, TypeError):
-        return False
-
-
-def _svg_piece(segment, A: np.ndarray, b: np.ndarray, where: str) -> Piece:
-    def finite(points) -> bool:
-        return all(math.isfinite(float(q[0])) and math.isfinite(float(q[1])) for q in points)
-
-    given = _points(segment)
-    if not finite(given):
-        raise DrawingError(f"{where}: non-finite coordinates (NaN or infinity); check the numbers in its path data")
-    with np.errstate(all="ignore"):  # overflow shows up as non-finite samples, checked next
-        if isinstance(segment, se.Linear) or _is_flat_arc(segment):
-            piece = LinePiece(_xy(A, b, segment.start), _xy(A, b, segment.end))
-        elif isinstance(segment, (se.QuadraticBezier, se.CubicBezier)):
-            piece = BezierPiece(tuple(_xy(A, b, q) for q in given))
-        else:
-            piece = _arc_piece(segment, _arc_geometry(segment), A, b, where)
-        _check_samples(piece, where)
-    return piece
-
-
-def _segment_notes(segment, label: str):
-    """Notes on Bézier handles of zero length (the derivative vanishes at that end) and zero radii."""
-    if isinstance(segment, (se.QuadraticBezier, se.CubicBezier)):
-        p = _points(segment)
-        kind = "cubic" if len(p) == 4 else "quadratic"
-        for end, (a, c) in (("start (t=0)", (p[0], p[1])), ("end (t=1)", (p[-1], p[-2]))):
-            if _same(a, c):
-                yield (f"{label}: {kind} Bézier with a zero-length handle at its {end}: its derivative "
-                       "vanishes there and the tangent is only the limit direction")
-    elif _is_flat_arc(segment):
-        yield f"{label}: an elliptical arc with a zero radius is a straight line (as SVG draws it)"
-
-
 def _subpaths(segments: list) -> list[list]:
     """Runs of segments each starting exactly where the previous one ends; a new ``M`` elsewhere
     starts a new run. ``Move`` is dropped, and so is a ``Z`` that is already at its start."""
     drawn = [s for s in segments if not isinstance(s, se.Move)
-             and not (isinstance(s, se.Close) and _same(s.start, s.end))]
+             and not (isinstance(s, se.Close) and same_point(s.start, s.end))]
     runs = [[drawn[0]]] if drawn else []
     for previous, segment in zip(drawn, drawn[1:]):
-        if _same(segment.start, previous.end):
+        if same_point(segment.start, previous.end):
             runs[-1].append(segment)
         else:
             runs.append([segment])
     return runs
-
-
-def _check_samples(piece: Piece, where: str) -> None:
-    with np.errstate(all="ignore"):
-        values = np.hstack([piece.point(_SAMPLES), piece.d1(_SAMPLES), piece.d2(_SAMPLES)])
-    if not np.all(np.isfinite(values)):
-        raise DrawingError(f"{where}: non-finite coordinates (NaN or infinity); check the numbers in its path data "
-                           "and transforms")
-    largest = float(np.abs(values[:, : _SAMPLES.size]).max())
-    if largest > MAX_COORD:
-        raise DrawingError(f"{where}: coordinates reach {largest:.3g}, beyond the supported {MAX_COORD:.0e}: "
-                           "rescale the drawing")
 
 
 def _assemble(entries, *, name: str, source: str, notes: list[str]) -> Drawing:
@@ -758,7 +611,7 @@ def _assemble(entries, *, name: str, source: str, notes: list[str]) -> Drawing:
     for (unit, *_), runs in zip(entries, runs_of):
         total[unit] = total.get(unit, 0) + len(runs)
     counted: dict = {}
-    built = []  # (name, pieces)
+    built, points = [], []  # (name, pieces); the elements that draw a point
     for (unit, base, where, _, A, b), runs in zip(entries, runs_of):
         kept_runs = []
         for run in runs:
@@ -766,22 +619,27 @@ def _assemble(entries, *, name: str, source: str, notes: list[str]) -> Drawing:
             label = base if total[unit] == 1 else f"{base}#{counted[unit]}"
             pieces = []
             for i, segment in enumerate(run, start=1):
-                if _is_zero_length(segment):
+                if is_zero_length(segment):
                     notes.append(f"{where}: {label} segment {i} has zero length and was dropped")
                     continue
-                piece = _svg_piece(segment, A, b, f"{where}, {label} segment {i}")
-                notes.extend(_segment_notes(segment, f"{where}: {label} piece {len(pieces) + 1}"))
+                piece = svg_piece(segment, A, b, f"{where}, {label} segment {i}")
+                notes.extend(segment_notes(segment, f"{where}: {label} piece {len(pieces) + 1}"))
                 pieces.append(piece)
             if pieces:
                 kept_runs.append((label, pieces))
             else:
                 notes.append(f"{where}: subpath {label} has only zero-length segments and was dropped")
         if not kept_runs:
-            raise DrawingError(f"{where} has only zero-length segments (it draws a point, not a curve): "
-                               "remove it or give it some extent")
+            points.append(where)
         built.extend(kept_runs)
+    if not built:
+        raise DrawingError(f"{points[0]} has only zero-length segments (it draws a point, not a curve): "
+                           "remove it or give it some extent")
+    if points:
+        notes.append(f"skipped {len(points)} element(s) of only zero-length segments (each draws a point, not a "
+                     f"curve): {', '.join(points[:5])}{' ...' if len(points) > 5 else ''}")
 
-    size = extent(np.hstack([p.point(_SAMPLES) for _, pieces in built for p in pieces]))
+    size = extent(np.hstack([p.point(SAMPLES) for _, pieces in built for p in pieces]))
     if not size > 0:
         raise DrawingError(f"{source}: all points of the drawing coincide; expected a curve with some extent")
     paths = []
@@ -797,4 +655,4 @@ def _assemble(entries, *, name: str, source: str, notes: list[str]) -> Drawing:
 
 
 def _span(piece: Piece) -> float:
-    return extent(piece.point(_SAMPLES))
+    return extent(piece.point(SAMPLES))
