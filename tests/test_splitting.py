@@ -101,9 +101,27 @@ def test_a_hairpin_tighter_than_the_tolerance_is_a_cusp(fit):
     assert res.success, res.message
     assert len(res.runs) == 2 and abs(res.runs[1].corner) == pytest.approx(math.pi, abs=1e-3)
     assert (res.hausdorff if fit == "arcs" else res.deviation) <= 1e-3
-    # where the tolerance is finer than the tip (radius above tol / 8), it stays one smooth run
+    # where the tolerance is finer than the tip (radius above tol / 4), it stays one smooth run
     res = fit_path(_hairpin(0.05), 1e-4)  # radius 1.25e-3
     assert res.success and len(res.runs) == 1
+
+
+def test_a_hairpin_of_a_quarter_of_the_tolerance_is_a_cusp():
+    # The Rust documentation's favicon (rustdoc's favicon-de23e50b.svg, its "D") at 6 m: an S command
+    # whose second control point is its end overshoots and comes back through a tip of radius 0.126 mm
+    # (radius bound 0.1257 mm), turning by 150.2 degrees across 1 mm. Above an eighth of the tolerance,
+    # it was one smooth run, fitted by arcs of a millimetre turning back and forth, and the section
+    # through it was one that no stop fits (the figure failed after nine rounds of rests, 74 s)
+    from skatetrace.drawings.splitting import TIP_RADIUS, _cusps
+    from skatetrace.drawings.svg import parse_path_string
+
+    d = parse_path_string("M59.6,122.8L73.8,80c0,0,7,0,10.8,0s28.8-1.7,25.4,17.5c-3.4,19.2-18.8,25.2-36.8,25.4"
+                          "S59.6,122.8,59.6,122.8z")
+    s_piece = d.scaled_to(d.size() * 6.0 / 199.7, "m").paths[0].pieces[4]
+    tips = _cusps(s_piece, 1.0, TIP_RADIUS * 1e-3)
+    assert len(tips) == 2 and tips[0] == pytest.approx(0.67175, abs=1e-4)
+    assert tips[1] == 1.0  # the zero-length handle at its end, where the speed vanishes
+    assert _cusps(s_piece, 1.0, 0.125 * 1e-3) == [1.0]  # at an eighth of the tolerance the tip was smooth
 
 
 def test_a_tight_turn_that_does_not_come_back_is_not_a_cusp():

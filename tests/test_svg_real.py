@@ -309,3 +309,20 @@ def test_a_grid_of_dots_is_one_shape_of_few_arcs_traced_once(tmp_path):
     assert done.success, done.message
     assert len({id(s.phases) for s in done.trace.sections}) == 1
     assert done.schedule.t.size < 2_000_000
+
+
+def test_a_near_cusp_of_a_quarter_of_the_tolerance_is_a_rest_and_the_figure_traces(tmp_path):
+    # The Rust documentation's favicon's "D" (see test_splitting): with its tip of 0.126 mm at 6 m a
+    # cusp, its long run is two sections, each traced; kept smooth, the section through the tip
+    # failed ("no stop of length 3.10 found", 31 s)
+    import skatetrace as st
+    from skatetrace.pipeline import trace_and_verify
+
+    d = ("M59.6,122.8L73.8,80c0,0,7,0,10.8,0s28.8-1.7,25.4,17.5c-3.4,19.2-18.8,25.2-36.8,25.4"
+         "S59.6,122.8,59.6,122.8z")
+    (tmp_path / "d.svg").write_text(svg(f'<path d="{d}"/><path d="M0 0 H 199.7 V 184.2 H 0 Z" fill="none" '
+                                        'stroke="black"/>', viewBox="0 0 199.7 184.2"))
+    fig = st.resolve(tmp_path / "d.svg", size="6m", tol="1mm").figure
+    assert [len(c.sections()) for c in fig.curves] == [3, 4]
+    done = trace_and_verify(fig, fig.params, st.TraceOptions(speed=2.0), rests="never")
+    assert done.success, done.message
