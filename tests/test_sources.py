@@ -384,6 +384,46 @@ def test_what_is_not_absorbed():
     assert moves == {"s": pytest.approx(1.5e-4)} and len(absorbed.paths[0].pieces) == 6
 
 
+def test_a_piece_of_rounding_keeps_no_neighbour_from_being_absorbed():
+    # octicons' versions-16 at 6 m: a path starts with a line of 0.375 mm after a corner and its "z"
+    # adds a line of 3e-16 m before it. Absorbed first (the shortest), the rounding kept its
+    # neighbour, the 0.375 mm line, from being absorbed: a section nothing traced. Now the pieces of
+    # rounding go in a pass of their own, and the line after them.
+    from skatetrace.drawings.curves import Drawing, LinePiece, Path as DPath
+
+    pts = [(0.0, 0.0), (0.000375, 0.0), (0.000375, 6.0), (-6.0, 6.0), (0.0, 1e-16)]
+    pieces = tuple(LinePiece(a, b) for a, b in zip(pts, pts[1:] + pts[:1]))
+    absorbed, moves = Drawing((DPath(pieces, True, "v"),)).absorbed(4e-3 / 3, 0.5)
+    kept = absorbed.paths[0].pieces
+    assert len(kept) == 3 and min(float(np.hypot(*(p.end - p.start))) for p in kept) > 1.0
+    assert moves == {"v": pytest.approx(0.000375 / 2)}  # the line's half; the rounding moved nothing
+    # where the rounding comes first alone, it is absorbed and the rest stays as drawn
+    only = (LinePiece((0.0, 0.0), (6.0, 0.0)), LinePiece((6.0, 0.0), (6.0, 6.0)), LinePiece((6.0, 6.0), (0.0, 1e-16)),
+            LinePiece((0.0, 1e-16), (0.0, 0.0)))
+    absorbed, moves = Drawing((DPath(only, True, "w"),)).absorbed(4e-3 / 3, 0.5)
+    assert len(absorbed.paths[0].pieces) == 3 and moves["w"] < 1e-15
+
+
+def test_tiny_pieces_are_absorbed_where_the_fit_then_needs_its_soft_joins_as_corners(tmp_path):
+    # tabler's compass (filled) at 6 m: a closing line of 0.3 mm between two corners. Absorbed, the
+    # fit gets 0.85 mm, in which the soft joins of its needle's rounded tip (lines of 1.5 to 10 mm
+    # turning a few degrees) add up beyond the tolerance: the drawing was fitted without the
+    # absorption, the 0.3 mm line a section that no stop fits ("no stop of length 0.00015 found").
+    # Now the absorbed drawing is fitted with those joins as corners, as the drawing itself would be.
+    d = ("M15.684 7.051l-6 2a1 1 0 0 0 -.633 .633l-2.007 6.026l-.023 .086l-.017 .113l-.004 .068v.044l.009 "
+         ".111l.012 .07l.04 .144l.045 .1l.054 .095l.064 .09l.069 .075l.084 .074l.098 .07l.1 .054l.078 "
+         ".033l.105 .033l.109 .02l.043 .005l.068 .004h.044l.111 -.009l.07 -.012l.02 -.006l.019 -.002l.074 "
+         "-.022l6 -2a1 1 0 0 0 .633 -.633l2 -6a1 1 0 0 0 -1.265 -1.265z")
+    svg = tmp_path / "compass.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 24 24"><path d="M0 0h24v24h-24z" '
+                   f'fill="none" stroke="black"/><path d="{d}"/></svg>')
+    r = resolve(str(svg), size="6m", tol="1mm")
+    assert r.fit.success and r.fit.hausdorff <= 1e-3
+    assert any(n.startswith("absorbed the pieces between two corners") for n in r.notes), r.notes
+    lengths = [sum(p.segment.length for p in s.pieces) for c in r.figure.curves for s in c.sections()]
+    assert min(lengths) > 1e-3
+
+
 def test_an_open_paths_tiny_end_piece_at_a_corner_is_dropped_moving_the_drawing_by_its_length():
     # An open path that starts with a line of 0.08 mm at 6 m and turns a corner into the rest: alone
     # between its start and the corner, that line was a section nothing traces ("no stop of length

@@ -330,18 +330,26 @@ def _arc_fit(drawing: Drawing, tol_v: float, arc_mode: bool, method: str, unit: 
     # length), where the fit still succeeds in what is left of the tolerance; else fitted as it is.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+
+        def soft_or_sharp(d, t):
+            """The fit with soft corners, else without: joins rounded because they turn little for their
+            pieces' length can still add up along a run beyond the tolerance, and are corners again."""
+            soft = fit_drawing(d, t, method=method)
+            if soft.success:
+                return soft
+            sharp = fit_drawing(d, t, method=method, soft_corners=False)
+            if sharp.success:
+                caught.clear()  # the soft attempt's complaints were answered
+            return sharp if sharp.success else soft
+
+        # either way the tiny pieces absorbed, where that fits: in what is left of the tolerance the
+        # soft joins may add up beyond it (a tabler icon's 0.3 mm closing line stayed a section)
         fit, fitted, fit_tol, gaps, moves = _absorbed_fit(fitted, fit_tol, gaps, EXACT_MAX_CORNER_DEG, arc_mode,
-                                                          lambda d, t: fit_drawing(d, t, method=method))
+                                                          soft_or_sharp)
         if moves:
             notes.append(_absorbed_note(moves, "corners", unit))
         if fit is None or not fit.success:
-            fit = fit_drawing(fitted, fit_tol, method=method)
-        if not fit.success:
-            # joins rounded because they turn little for their pieces' length (soft corners) can
-            # still add up along a run beyond the tolerance: then they are corners, as they were
-            sharp = fit_drawing(fitted, fit_tol, method=method, soft_corners=False)
-            if sharp.success:
-                fit, caught = sharp, []
+            fit = soft_or_sharp(fitted, fit_tol)
     tight = _kink_corner_deg(drawing, tol_v)
     if not fit.success and tight < EXACT_MAX_CORNER_DEG:
         # The arc spline is tangent-continuous through a smooth join, so a join that turns by delta
