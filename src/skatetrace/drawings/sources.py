@@ -334,13 +334,13 @@ def _arc_fit(drawing: Drawing, tol_v: float, arc_mode: bool, method: str, unit: 
         def soft_or_sharp(d, t):
             """The fit with soft corners, else without: joins rounded because they turn little for their
             pieces' length can still add up along a run beyond the tolerance, and are corners again."""
-            soft = fit_drawing(d, t, method=method)
-            if soft.success:
-                return soft
-            sharp = fit_drawing(d, t, method=method, soft_corners=False)
-            if sharp.success:
-                caught.clear()  # the soft attempt's complaints were answered
-            return sharp if sharp.success else soft
+            fit = fit_drawing(d, t, method=method)
+            if not fit.success:
+                sharp = fit_drawing(d, t, method=method, soft_corners=False)
+                fit = sharp if sharp.success else fit
+            if fit.success:
+                caught.clear()  # the complaints of the attempts before it were answered
+            return fit
 
         # either way the tiny pieces absorbed, where that fits: in what is left of the tolerance the
         # soft joins may add up beyond it (a tabler icon's 0.3 mm closing line stayed a section)
