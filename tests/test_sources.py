@@ -404,6 +404,23 @@ def test_a_piece_of_rounding_keeps_no_neighbour_from_being_absorbed():
     assert len(absorbed.paths[0].pieces) == 3 and moves["w"] < 1e-15
 
 
+def test_a_join_into_a_zero_length_handle_turns_by_its_limit_direction():
+    # phosphor's phone-incoming (duotone) at 6 m: a 0.3 mm closing line meets a cubic whose first
+    # handle has zero length. Read from the vanishing derivative, the join turned by 0 degrees, so
+    # the line counted as part of a smooth run and was never absorbed; the fit, which takes the
+    # limit direction, made a corner there, and the line was a section no stop fits.
+    from skatetrace.drawings.curves import BezierPiece, Drawing, LinePiece, Path as DPath, _turn_deg
+
+    line = LinePiece((0.0, -0.0003), (0.0, 0.0))
+    cubic = BezierPiece(((0.0, 0.0), (0.0, 0.0), (-3.0, 0.0), (-6.0, 0.0)))  # leaves along -x
+    assert _turn_deg(line, cubic) == pytest.approx(90.0)
+    back = BezierPiece(((-6.0, 0.0), (-3.0, 0.0), (0.0, 0.0), (0.0, 0.0)))  # arrives along +x
+    assert _turn_deg(back, LinePiece((0.0, 0.0), (0.0, 6.0))) == pytest.approx(90.0)
+    square = (line, cubic, LinePiece((-6.0, 0.0), (-6.0, -6.0)), LinePiece((-6.0, -6.0), (0.0, -0.0003)))
+    absorbed, moves = Drawing((DPath(square, True, "p"),)).absorbed(4e-3 / 3, 0.5)
+    assert moves == {"p": pytest.approx(1.5e-4)} and len(absorbed.paths[0].pieces) == 3
+
+
 def test_tiny_pieces_are_absorbed_where_the_fit_then_needs_its_soft_joins_as_corners(tmp_path, recwarn):
     # tabler's compass (filled) at 6 m: a closing line of 0.3 mm between two corners. Absorbed, the
     # fit gets 0.85 mm, in which the soft joins of its needle's rounded tip (lines of 1.5 to 10 mm
