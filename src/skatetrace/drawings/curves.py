@@ -437,16 +437,64 @@ def _as_points(seq: Sequence) -> np.ndarray:
     return np.asarray(seq, dtype=float)
 
 
-def _travel(piece: Piece, t: float, side: float) -> np.ndarray:
-    """The direction of travel at the end ``t`` of a piece (``side`` -1 at its end, +1 at its start).
+def _bezier_end_direction(piece: Piece, t: float) -> np.ndarray | None:
+    """Exact end tangent of a Bézier (also under affine maps): the first non-zero control difference."""
+    if isinstance(piece, AffinePiece):
+        v = _bezier_end_direction(piece.base, t)
+        if v is None:
+            return None
+        w = np.asarray(piece.A, float) @ v
+        n = math.hypot(w[0], w[1])
+        return w / n if n > 0 and math.isfinite(n) else None
+    if not isinstance(piece, BezierPiece):
+        return None
+    p = np.asarray(piece.control, float)
+    extent = float(np.max(np.ptp(p, axis=0)))
+    if not extent > 0:
+        return None
+    order = range(1, len(p)) if t == 0.0 else range(len(p) - 2, -1, -1)
+    for k in order:
+        v = p[k] - p[0] if t == 0.0 else p[-1] - p[k]
+        n = math.hypot(v[0], v[1])
+        if n > 1e-12 * extent:
+            return v / n
+    return None
 
-    Where the derivative vanishes (a Bézier with a zero-length handle there) it is the limit
-    direction, ``side`` times the second derivative, as :mod:`.splitting` takes it.
+
+def _direction(piece: Piece, t: float, side: int, vscale: float, cusp: bool = False) -> np.ndarray | None:
+    """Unit travel direction leaving ``t`` (``side=+1``) or arriving at it (``side=-1``).
+
+    Where ``r'`` vanishes (a zero-length Bézier handle, a cusp) it is the limit direction: the next
+    non-zero Bézier control difference, else ``+-r''``, else a one-sided difference of points.
     """
-    v = _col(piece, "d1", t)
-    if math.hypot(v[0], v[1]) <= 1e-9 * piece_length(piece):
-        v = side * _col(piece, "d2", t)
-    return v
+    if t in (0.0, 1.0) and not cusp:
+        v = _bezier_end_direction(piece, t)
+        if v is not None:
+            return v
+    d1 = _col(piece, "d1", t)
+    sp = math.hypot(d1[0], d1[1])
+    if not cusp and sp > 1e-7 * vscale:
+        return d1 / sp
+    d2 = _col(piece, "d2", t)
+    n2 = math.hypot(d2[0], d2[1])
+    if n2 > 1e-7 * vscale:
+        return side * d2 / n2
+    p = _col(piece, "point", t)
+    for h in (1e-6, 1e-4, 1e-2, 1e-1):
+        t2 = min(max(t + side * h, 0.0), 1.0)
+        if t2 == t:
+            continue
+        v = _col(piece, "point", t2) - p
+        n = math.hypot(v[0], v[1])
+        if n > 1e-12 * vscale:
+            return side * v / n
+    return None
+
+
+def _end_direction(piece: Piece, t: float, side: int) -> np.ndarray:
+    """:func:`_direction` at an end of a whole piece, else (nowhere defined) its chord, as :mod:`.splitting` takes it."""
+    v = _direction(piece, t, side, max(piece_length(piece), 1e-300))
+    return v if v is not None else _col(piece, "point", 1.0) - _col(piece, "point", 0.0)
 
 
 def _turn_deg(before: Piece, after: Piece) -> float:
@@ -456,7 +504,7 @@ def _turn_deg(before: Piece, after: Piece) -> float:
     vector, it was 0, and a 0.3 mm line before such a Bézier (phosphor's phone-incoming, at 6 m) was
     taken for part of a smooth run, never absorbed, where the fit made a corner.
     """
-    a, b = _travel(before, 1.0, -1.0), _travel(after, 0.0, 1.0)
+    a, b = _end_direction(before, 1.0, -1), _end_direction(after, 0.0, +1)
     return abs(math.degrees(math.atan2(a[0] * b[1] - a[1] * b[0], float(a @ b))))
 
 
@@ -475,18 +523,22 @@ def _absorbed(path: Path, limit: float, corner_deg: float) -> tuple[Path, float]
     The pieces of rounding go first (octicons' versions-16 closes a path with a line of 3e-16 m at
     6 m after a first line of 0.375 mm, which their neighbourhood kept as a section of its own).
     """
-    clean, noise = _absorbed_once(path, _ROUNDING_SHARE * limit, corner_deg)
-    out, moved = _absorbed_once(clean, limit, corner_deg)
+    if len(path.pieces) < 2 or not limit > 0.0:
+        return path, 0.0
+    lengths = [piece_length(pc) for pc in path.pieces]
+    clean, noise = _absorbed_once(path, lengths, _ROUNDING_SHARE * limit, corner_deg)
+    if clean is not path:  # the neighbours of the rounding moved: their lengths again
+        lengths = [piece_length(pc) for pc in clean.pieces]
+    out, moved = _absorbed_once(clean, lengths, limit, corner_deg)
     return out, max(noise, moved)
 
 
-def _absorbed_once(path: Path, limit: float, corner_deg: float) -> tuple[Path, float]:
-    """One pass of :func:`_absorbed`: the pieces shorter than ``limit``, shortest first."""
+def _absorbed_once(path: Path, lengths: list[float], limit: float, corner_deg: float) -> tuple[Path, float]:
+    """One pass of :func:`_absorbed`: the pieces shorter than ``limit``, shortest first (``lengths`` theirs)."""
     pieces = list(path.pieces)
     n = len(pieces)
-    if n < 2 or not limit > 0.0:
+    if n < 2:
         return path, 0.0
-    lengths = [piece_length(pc) for pc in pieces]
     start = [np.zeros(2) for _ in range(n)]  # how far each kept piece's start and end move
     end = [np.zeros(2) for _ in range(n)]
     gone: dict[int, float] = {}  # the pieces absorbed or dropped, and how far that moves the drawing

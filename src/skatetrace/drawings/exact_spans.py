@@ -20,9 +20,8 @@ from scipy.interpolate import CubicSpline
 from .curves import AffinePiece, Piece, SplinePiece, curvature
 from ..errors import FitError
 from .corners import _wrap
-from .curves import _gl_lengths
+from .curves import _direction, _gl_lengths
 from .spirals import Span
-from .splitting import _direction
 from ..figures.geometry import Segment, Spiral, shifted_polynomial
 
 __all__ = ["SpanGeom", "subspans", "SAMPLES", "START_TURN", "START_DENSITY"]

@@ -37,9 +37,9 @@ import numpy as np
 from .biarcs import _biarc, _chain_poses
 from .certify import _FAIL, _Cert, _certify
 from .corners import _wrap
-from .curves import Drawing, Path, Piece, _col, _gl_lengths, curvature, piece_length
+from .curves import Drawing, Path, Piece, _col, _direction, _gl_lengths, curvature, piece_length
 from .fit_results import DrawingFit, FitStatus, FittedRun, Knot, PathFit, Where, gathered
-from .splitting import Run, _direction, _split
+from .splitting import Run, _split
 from ..errors import FitError
 from ..figures.geometry import Pose, Segment
 from ..progress import Channel

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from .corners import _wrap
-from .curves import AffinePiece, BezierPiece, LinePiece, Path, Piece, _col, piece_length
+from .curves import LinePiece, Path, Piece, _col, _direction, piece_length
 from .spirals import Span, _spiral_spans
 from ..errors import FitError
 
@@ -66,60 +66,6 @@ class Run:
 
     spans: tuple[Span, ...]
     corner: float | None
-
-
-def _bezier_end_direction(piece: Piece, t: float) -> np.ndarray | None:
-    """Exact end tangent of a Bézier (also under affine maps): the first non-zero control difference."""
-    if isinstance(piece, AffinePiece):
-        v = _bezier_end_direction(piece.base, t)
-        if v is None:
-            return None
-        w = np.asarray(piece.A, float) @ v
-        n = math.hypot(w[0], w[1])
-        return w / n if n > 0 and math.isfinite(n) else None
-    if not isinstance(piece, BezierPiece):
-        return None
-    p = np.asarray(piece.control, float)
-    extent = float(np.max(np.ptp(p, axis=0)))
-    if not extent > 0:
-        return None
-    order = range(1, len(p)) if t == 0.0 else range(len(p) - 2, -1, -1)
-    for k in order:
-        v = p[k] - p[0] if t == 0.0 else p[-1] - p[k]
-        n = math.hypot(v[0], v[1])
-        if n > 1e-12 * extent:
-            return v / n
-    return None
-
-
-def _direction(piece: Piece, t: float, side: int, vscale: float, cusp: bool = False) -> np.ndarray | None:
-    """Unit travel direction leaving ``t`` (``side=+1``) or arriving at it (``side=-1``).
-
-    Where ``r'`` vanishes (a zero-length Bézier handle, a cusp) it is the limit direction: the next
-    non-zero Bézier control difference, else ``+-r''``, else a one-sided difference of points.
-    """
-    if t in (0.0, 1.0) and not cusp:
-        v = _bezier_end_direction(piece, t)
-        if v is not None:
-            return v
-    d1 = _col(piece, "d1", t)
-    sp = math.hypot(d1[0], d1[1])
-    if not cusp and sp > 1e-7 * vscale:
-        return d1 / sp
-    d2 = _col(piece, "d2", t)
-    n2 = math.hypot(d2[0], d2[1])
-    if n2 > 1e-7 * vscale:
-        return side * d2 / n2
-    p = _col(piece, "point", t)
-    for h in (1e-6, 1e-4, 1e-2, 1e-1):
-        t2 = min(max(t + side * h, 0.0), 1.0)
-        if t2 == t:
-            continue
-        v = _col(piece, "point", t2) - p
-        n = math.hypot(v[0], v[1])
-        if n > 1e-12 * vscale:
-            return side * v / n
-    return None
 
 
 def _turn_across(piece: Piece, t: float, reach: float) -> float:
