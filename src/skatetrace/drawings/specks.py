@@ -12,7 +12,7 @@ the circle itself, two half arcs, and its bound is the circle's distance to the 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -137,8 +137,7 @@ def speck_circle(path: Path, tol: float, limit: float) -> Speck | None:
     cert = _certify(path.pieces, window, speck.pose(), speck.segments(), limit, limit / 8.0)
     if not (cert.ok and cert.bound <= limit):
         return None
-    return Speck(centre=speck.centre, radius=r, bound=cert.bound, sampled=cert.sampled, clockwise=speck.clockwise,
-                 start=speck.start)
+    return replace(speck, bound=cert.bound, sampled=cert.sampled)
 
 
 def speck_fit(path: Path, speck: Speck, tol: float, method: str = "greedy") -> PathFit:
