@@ -311,7 +311,7 @@ def split_path(path: Path, *, corner_tol_deg: float = 0.5) -> list[Run]:
 
     Examples
     --------
-    >>> from skatetrace.drawings.curves import FunctionPiece
+    >>> from skatetrace.drawings.curves import BezierPiece, FunctionPiece
     >>> sine = FunctionPiece(lambda u: (u, np.sin(u)), 0.0, 2 * np.pi,
     ...                      lambda u: (np.ones_like(u), np.cos(u)), lambda u: (np.zeros_like(u), -np.sin(u)))
     >>> [run] = split_path(Path((sine,)))
