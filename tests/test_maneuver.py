@@ -247,3 +247,75 @@ def test_without_the_fallbacks_a_stop_that_needs_them_is_deferred(monkeypatch):
     monkeypatch.undo()
     line = solve_stop(params, [(0.0, 0.5), (2.0, 1.0)], (4.0, 0.0), 1.0, fallback=False)
     assert not line.success and not line.deferred and "no stop" in line.message
+
+
+# ---- issue 18: weak ramps given up far beyond the length -----------------------------------------
+
+
+def test_a_weak_ramp_is_given_up_beyond_the_arc_length_asked():
+    from skatetrace.tracing import maneuver
+
+    p = SleighParams()
+    glide = maneuver.glide_state(p, 1.0, 0.0, 0.4, 1.0)
+    stopper = maneuver._Stopper(p, np.array([glide[0], glide[1], 0.0, 0.4, 0.0]),
+                                [((1.0, 0.0, 0.0, 0.0), math.inf)], 20.0, 1e-3)
+    weak = 1e-6  # glides on past a length of 12 without stopping
+    with pytest.raises(maneuver._Beyond):
+        stopper.run(weak, 1e-6, 1e-8, beyond=8.0)
+    with pytest.raises(maneuver._NoStop) as full:
+        stopper.run(weak, 1e-6, 1e-8)
+    assert not isinstance(full.value, maneuver._Beyond)  # integrated in full, it never stops
+    # a stop before the arc length given is the same stop, to the bit
+    tau, y = stopper.run(1.0, 1e-9, 1e-11)
+    tau_capped, y_capped = stopper.run(1.0, 1e-9, 1e-11, beyond=8.0 * abs(y[4]))
+    assert (tau_capped, list(y_capped)) == (tau, list(y))
+
+
+@pytest.mark.parametrize("ends,resolved", [
+    (("far", "far"), []),                      # both weak ramps given up: no root between
+    (("far", (2.0, 1.0)), []),                 # the stronger stops beyond the length: none either
+    (("far", (0.5, 1.0)), [0, 4]),             # it stops short of it: both looked at in full
+    (("far", None), [0, 4]),                   # it does not stop (the singular point, say)
+    (((2.0, 1.0), "far"), [0, 4]),             # a weaker ramp stops, a stronger runs on: in full
+])
+def test_first_bracket_integrates_a_far_point_in_full_only_where_it_decides(ends, resolved):
+    from skatetrace.tracing import maneuver
+
+    far, full = maneuver._FAR, []
+    values = {0: ends[0], 4: ends[1]}
+    in_full = {0: (3.0, 1.0), 4: ends[1] if ends[1] != far else (3.0, 1.0)}
+
+    def length_at(k, exact=False):
+        if exact:
+            full.append(k)
+            return in_full[k]
+        return values.get(k, (3.0, 1.0))  # the fine points between stop beyond the length
+
+    assert maneuver._first_bracket(length_at, 0, 5, 1.0, 4) is None or ends[1] == (0.5, 1.0)
+    assert sorted(set(full)) == resolved
+
+
+def test_the_scan_gives_up_weak_ramps_and_finds_the_same_stop(monkeypatch):
+    from skatetrace.tracing import maneuver
+
+    p, legs, glide_ab = SleighParams(), [(0.8, 1.5)], (0.0, 0.4)
+    real = maneuver.final_state
+    ran = []
+
+    def recorded(*args, **kw):
+        out = real(*args, **kw)
+        if kw["rtol"] == maneuver._GRID_RTOL:
+            ran.append(abs(out[2][4]))
+        return out
+
+    monkeypatch.setattr(maneuver, "final_state", recorded)
+    capped = solve_stop(p, legs, glide_ab, 1.0)
+    far_capped = max(ran)
+    ran.clear()
+    monkeypatch.setattr(maneuver, "_FAR_LENGTHS", math.inf)
+    full = solve_stop(p, legs, glide_ab, 1.0)
+    assert capped.success and full.success
+    assert capped.params[0] == pytest.approx(full.params[0], rel=1e-14)
+    assert capped.duration == pytest.approx(full.duration, rel=1e-14)
+    # the weak ramps glide on for tens of lengths when integrated in full
+    assert far_capped <= 8.0 * 1.5 * (1 + 1e-12) < max(ran)

@@ -267,10 +267,20 @@ _SCAN_RTOL, _SCAN_ATOL = 1e-9, 1e-11
 # adjacent floating-point numbers took some fifteen integrations; this takes two or three.
 _SCAN_XTOL = 1e-9
 _SECANT_STEPS = 8
+# A grid point's integration is given up once the blade has run this many times the length
+# without stopping (a weak ramp glides on for most of the time allowed, some ten times the cost
+# of a stop near the length); such a point stands for "farther, or never" (_FAR) where that
+# settles the scan, and is integrated in full where it does not (see _first_bracket).
+_FAR_LENGTHS = 8.0
+_FAR = "far"
 
 
 class _NoStop(Exception):
     """An integration that did not end with the speed vanishing (no stop, singular, failure)."""
+
+
+class _Beyond(_NoStop):
+    """An integration given up at an arc length (:meth:`_Stopper.run`): whether it stops beyond is not known."""
 
 
 class _Stopper:
@@ -287,12 +297,22 @@ class _Stopper:
         self.t_max, self.singular_limit = t_max, singular_limit
         self.nfev = 0
 
-    def run(self, alpha, rtol, atol):
-        """``(tau, y)`` at the first stop under ``u = alpha t``; raises :class:`_NoStop` otherwise."""
+    def run(self, alpha, rtol, atol, beyond=math.inf):
+        """``(tau, y)`` at the first stop under ``u = alpha t``; raises :class:`_NoStop` otherwise.
+
+        ``beyond``: an arc length at which to give up, raising :class:`_Beyond`: the stop, if
+        there is one, is farther.
+        """
         self.nfev += 1
-        hit, tf, yf = final_state(self.params, self.y0, self.coef, self.switches, alpha, self.t_max, rtol=rtol,
+        switches = self.switches
+        if beyond < switches[-1]:
+            switches = switches.copy()  # the last leg ends there, and with it the integration
+            switches[-1] = max(beyond, switches[-2] if switches.size > 1 else 0.0)
+        hit, tf, yf = final_state(self.params, self.y0, self.coef, switches, alpha, self.t_max, rtol=rtol,
                                   atol=atol, stop_event=True, singular_limit=self.singular_limit,
                                   max_nfev=_MAX_EVALUATIONS)
+        if hit == "reached" and abs(yf[4]) >= switches[-1]:
+            raise _Beyond
         if hit != "stopped":
             raise _NoStop
         return tf, yf
@@ -315,6 +335,15 @@ def _first_bracket(length_at, start, stop, length, coarse):
     while i < stop - 1:
         j = min(i + coarse, stop - 1)
         li, lj = length_at(i), length_at(j)
+        if li is _FAR or lj is _FAR:
+            # A weak ramp given up far beyond the length stops there or never. Where the stronger
+            # one is given up too, or stops beyond the length, there is no root between (the
+            # stopping length falls as the ramp strengthens, as above); any other pair is looked
+            # at as integrated in full.
+            if li is _FAR and (lj is _FAR or (lj is not None and lj[0] > length)):
+                i = j
+                continue
+            li, lj = length_at(i, True), length_at(j, True)
         if li is not None and lj is not None:
             if (li[0] - length) * (lj[0] - length) <= 0.0:
                 return i, j
@@ -371,11 +400,13 @@ def _scan(stopper, grid, length, coarse):
     """
     cache = {}
 
-    def length_at(k):
-        if k not in cache:
+    def length_at(k, full=False):
+        if k not in cache or (full and cache[k] is _FAR):
             try:
-                tau, yf = stopper.run(grid[k], _GRID_RTOL, _GRID_ATOL)
+                tau, yf = stopper.run(grid[k], _GRID_RTOL, _GRID_ATOL, math.inf if full else _FAR_LENGTHS * length)
                 cache[k] = (abs(yf[4]), tau)
+            except _Beyond:
+                cache[k] = _FAR
             except _NoStop:
                 cache[k] = None
         return cache[k]
@@ -410,7 +441,7 @@ def _scan(stopper, grid, length, coarse):
 
 def _guess(grid, i, j, length_at, length, root):
     """``(alpha, tau)`` interpolated on the bracket ``grid[i..j]`` or, where an end does not stop, ``root``'s."""
-    li, lj = length_at(i), length_at(j)
+    li, lj = length_at(i, True), length_at(j, True)
     if li is None or lj is None:
         return root[:2]
     return _interpolated_guess(grid, i, j, li, lj, length)
