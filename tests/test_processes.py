@@ -190,3 +190,34 @@ def test_leaving_the_block_ends_a_child_still_at_work(forking):
             child = job._child._process
             raise KeyboardInterrupt
     assert not child.is_alive() and child.exitcode is not None
+
+
+def _pid_of(x):
+    return x * x, os.getpid()
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 20])
+def test_run_jobs_in_chunks_yields_every_result_in_order(forking, chunk):
+    """Jobs handed over a chunk at a time come back in order, each once, computed in the workers."""
+    out = list(processes.run_jobs(_pid_of, list(range(10)), workers=2, chunk=chunk))
+    assert [v for v, _ in out] == [x * x for x in range(10)]
+    assert os.getpid() not in {pid for _, pid in out}
+    # a chunk runs in one worker, one job after another
+    for k in range(0, 10, chunk):
+        assert len({pid for _, pid in out[k:k + chunk]}) == 1
+
+
+_PARENT = os.getpid()  # the test process; forked workers inherit it
+
+
+def _dies_in_a_worker_on_seven(x):
+    if x == 7 and os.getpid() != _PARENT:
+        os._exit(3)  # a worker killed in its chunk: the pool breaks, and its chunk never comes back
+    return x, os.getpid()
+
+
+def test_run_jobs_in_chunks_runs_here_what_a_dead_worker_did_not_send(forking):
+    """The results before the broken chunk are kept; that chunk and the rest are run here."""
+    out = list(processes.run_jobs(_dies_in_a_worker_on_seven, list(range(10)), workers=2, chunk=3))
+    assert [v for v, _ in out] == list(range(10))
+    assert out[7][1] == _PARENT  # computed here, after its worker died

@@ -100,7 +100,12 @@ def _stop(pool: ProcessPoolExecutor) -> None:
         process.terminate()
 
 
-def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None) -> Iterator[R]:
+def _each(fn: Callable[[J], R], batch: Sequence[J]) -> list[R]:
+    """``fn`` on every job of a batch, in a worker of :func:`run_jobs`."""
+    return [fn(job) for job in batch]
+
+
+def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None, chunk: int = 1) -> Iterator[R]:
     """``fn(job)`` for every job, yielded in the order of ``jobs`` as each becomes known.
 
     Parameters
@@ -112,6 +117,9 @@ def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None
     workers : int or None
         Processes to run them in (:func:`worker_count`); 1, or a batch of one, runs them here, one
         after another.
+    chunk : int
+        Jobs handed to a worker at a time, their results sent back together: for many jobs of a
+        few milliseconds, where handing each over on its own costs about as much as the job.
 
     Yields
     ------
@@ -124,15 +132,17 @@ def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None
         try:
             with ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("fork"),
                                      initializer=quiet_on_interrupt) as pool:
-                futures = [pool.submit(fn, job) for job in jobs]
+                size = max(1, int(chunk))
+                futures = [pool.submit(_each, fn, jobs[k:k + size]) for k in range(0, len(jobs), size)]
                 try:
                     for future in futures:
                         try:
-                            result = future.result()
+                            results = future.result()
                         except BrokenProcessPool:
                             break
-                        done += 1
-                        yield result
+                        for result in results:
+                            done += 1
+                            yield result
                 except (KeyboardInterrupt, GeneratorExit):  # Ctrl-C, or the caller stopped asking
                     _stop(pool)
                     raise

@@ -548,13 +548,61 @@ def _assemble(params, section, options, curve_index, glide, before, stop, launch
         success=status is TraceStatus.SUCCESS, status=status, message=msg, phases=phases,
         residuals=residuals, **base,
     )
-    return _with_metrics(trace, singular, options)
+    return _with_metrics(trace, singular, options, _step_samples(trace))
 
 
-def _with_metrics(trace: SectionTrace, singular: float, options: TraceOptions) -> SectionTrace:
-    t = np.linspace(0.0, trace.duration, 4001)
-    t = np.unique(np.concatenate([t, trace.breakpoints()]))
-    v = trace.evaluate(t, geometry=False)  # the metrics need no layout of the blade's path
+#: Where each integration step of a manoeuvre is looked at for the section's peaks: its two ends
+#: and seven points between. Over 790 sections (300 arcs, the double flower, 40 corpus drawings)
+#: the peaks came within 0.7 % of those from 128 points a step (2e-4 for |adot|, 5e-5 for the
+#: reach), where 4001 times evenly spread missed up to 70 % of |adot| and 25 % of |bdot|.
+_STEP_FRACTIONS = np.linspace(0.0, 1.0, 9)
+
+
+def _step_samples(trace: SectionTrace) -> dict[str, np.ndarray]:
+    """The motion of a launch-glide-stop section where its peaks are, in time order, without positions or layout.
+
+    The glide at its two ends (the mass is locked there) and every integration step of the launch
+    and the stop at :data:`_STEP_FRACTIONS`, each distinct time once, the section's start first and
+    its end last, as :meth:`SectionTrace.evaluate` gives them (``s`` and ``segment`` left at 0).
+    The steps crowd where the motion changes fast: near the ends, where the blade comes to rest,
+    the rates rise and fall within a fraction of the spacing of 4001 times evenly spread, which
+    also cost 1 ms a section (half of a single arc's trace); this costs a fifth to a half of that.
+    """
+    params, V = trace.params, trace.speed
+    times, rows = [], []
+    for ph in trace.phases:
+        man = ph.maneuver
+        if man is None:
+            a, b = trace.glide["a"], trace.glide["b"]
+            p1, p2 = glide_state(params, ph.kappa, a, b, 1.0)
+            times.append(np.array([ph.t0, ph.t1]))
+            rows.append(np.array([[p1, p1], [p2, p2], [a, a], [b, b], [0.0, 0.0], [0.0, 0.0]]))
+            continue
+        for leg in man.legs:
+            sol = leg.sol
+            tl = np.clip((sol.t_old[:, None] + sol.h[:, None] * _STEP_FRACTIONS).ravel(),
+                         min(leg.t0, leg.t1), max(leg.t0, leg.t1))
+            y = sol(tl)
+            adot, bdot, _ = constrained_rates(params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3], man.control(tl))
+            times.append(trace._section_time(ph, tl))
+            rows.append(np.vstack([y[:4], adot, bdot]))
+    t, first = np.unique(np.concatenate(times), return_index=True)
+    p1, p2, a, b, adot, bdot = np.hstack(rows)[:, first]
+    out = {"p1": p1 * V, "p2": p2 * V, "a": a, "b": b, "adot": adot * V, "bdot": bdot * V, "s": np.zeros(t.size)}
+    return trace._finish(out, np.zeros(t.size, dtype=int), geometry=False)
+
+
+def _with_metrics(trace: SectionTrace, singular: float, options: TraceOptions, v=None) -> SectionTrace:
+    """``trace`` with its ``metrics``: peaks of the mass's motion and the least speed inside, from ``v``.
+
+    ``v`` is the motion (as :meth:`SectionTrace.evaluate` gives it) at times from the section's
+    start to its end, both included, in order; by default at 4001 times evenly spread and the
+    breakpoints. A section whose mass goes beyond ``options.excursion_limit`` or whose blade
+    stops inside it fails (:attr:`TraceStatus.EXCURSION`).
+    """
+    if v is None:
+        t = np.unique(np.concatenate([np.linspace(0.0, trace.duration, 4001), trace.breakpoints()]))
+        v = trace.evaluate(t, geometry=False)  # the metrics need no layout of the blade's path
     ke = mass_energy(trace.params, v["xi1"], v["xi2"], v["a"], v["b"], v["adot"], v["bdot"])
     metrics = {
         "duration": trace.duration,
@@ -565,7 +613,7 @@ def _with_metrics(trace: SectionTrace, singular: float, options: TraceOptions) -
         "max_abs_a": float(np.max(np.abs(v["a"]))),
         "max_abs_b": float(np.max(np.abs(v["b"]))),
         "min_singular_distance": float(singular),
-        "min_speed_inside": float(np.min(np.abs(v["xi2"][1:-1]))) if t.size > 2 else 0.0,
+        "min_speed_inside": float(np.min(np.abs(v["xi2"][1:-1]))) if v["xi2"].size > 2 else 0.0,
     }
     status, message = trace.status, trace.message
     reach = max(metrics["max_abs_a"], metrics["max_abs_b"])
@@ -669,6 +717,8 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
 #: A pool of worker processes costs some tens of milliseconds to start and to hand the sections
 #: over: sections are traced here until they have taken this long (seconds), the rest in a pool.
 _POOL_WORTH = 0.05
+#: The most sections handed to a worker at a time (:func:`skatetrace.processes.run_jobs`).
+_CHUNK = 16
 
 
 def _trace_job(job) -> SectionTrace:
@@ -716,4 +766,7 @@ def _solve_sections(jobs: list, workers: int | None):
     while here < len(jobs) and (here == 0 or time.perf_counter() - started <= _POOL_WORTH):
         yield _trace_job(jobs[here])
         here += 1
-    yield from run_jobs(_trace_job, jobs[here:], workers)
+    rest = jobs[here:]
+    # handed over _CHUNK at a time where there are many: one by one, a section of one piece (2 to 6
+    # ms) cost about as much again to send to a worker and back
+    yield from run_jobs(_trace_job, rest, workers, chunk=max(1, min(_CHUNK, len(rest) // _CHUNK)))
