@@ -59,7 +59,7 @@ class _BrokenPool:
     def __exit__(self, *exc):
         return False
 
-    def submit(self, fn, job):
+    def submit(self, fn, *args):
         class Dead:
             def result(self):
                 raise BrokenProcessPool("a worker died")

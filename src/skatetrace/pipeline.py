@@ -364,8 +364,9 @@ _PEAKS = ("max_abs_a", "max_abs_b", "peak_abs_adot", "peak_abs_bdot", "peak_mass
 def _finish(result: VerifiedTrace, limits: HumanLimits | None) -> VerifiedTrace:
     """Refresh the sections' peaks from the exported rows, and add the feasibility verdict.
 
-    The tracer's metrics come from a uniform grid, which can miss a narrow spike of the rates
-    (where the mass passes near the singular point); the exported rows resolve it.
+    The tracer's metrics come from samples (a planned section's from a uniform grid, a traced
+    one's from its integration steps), which can miss a narrow spike of the rates (where the mass
+    passes near the singular point); the exported rows resolve it.
     """
     trace = result.trace
     peaks = exported_peaks(result.schedule, result.states, trace.params, len(trace.sections))
