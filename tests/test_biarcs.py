@@ -49,3 +49,20 @@ def test_biarc_errors_and_order_three():
         errs.append(float(np.max(np.min([distance_to_segment(pts, q, s) for q, s in zip(poses, segs)], axis=0))))
     slopes = np.diff(np.log(errs)) / np.diff(np.log(hs))
     assert np.all((slopes > 2.8) & (slopes < 3.4)) and abs(slopes[-1] - 3) < 0.1, slopes
+
+
+def test_an_arc_flatter_than_a_figure_allows_is_a_line():
+    """A biarc between nearly aligned poses 2 m apart turning by 1e-10 rad has arcs of radius 2e10:
+    a figure refuses radii over 1e9 ("use a line"), and a drawing's fit that made one could not be
+    traced. Such an arc is a line (its end moves by 1e-10 m at most); flatter arcs within the
+    figure's limit are kept."""
+    from skatetrace import Curve, Figure
+    from skatetrace.figures.figure import MAX_LENGTH, SMOOTH
+
+    segs = biarc(Pose(0.0, 0.0, 0.0), Pose(2.0, 0.0, 1e-10))
+    assert all(s.curvature == 0.0 for s in segs)
+    assert sum(s.length for s in segs) == pytest.approx(2.0, rel=1e-12)
+    Figure("flat", (Curve(tuple(segs), tuple(SMOOTH for _ in segs[1:]), name="flat"),))  # a figure takes it
+    assert biarcs._straightened(2.0 / MAX_LENGTH, 2.0) == 2.0 / MAX_LENGTH
+    assert biarcs._straightened(0.5 / MAX_LENGTH, 2.0) == 0.0
+    assert biarcs._straightened(1.0, 1e-14) == 0.0  # turning by less than 1e-13, as before

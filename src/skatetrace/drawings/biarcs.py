@@ -19,6 +19,7 @@ from typing import Sequence
 
 from .corners import _wrap
 from ..errors import FitError
+from ..figures.figure import MAX_LENGTH
 from ..figures.geometry import Pose, Segment, advance
 
 __all__ = ["biarc"]
@@ -47,8 +48,14 @@ def _biarc(x0: float, y0: float, h0: float, x1: float, y1: float, h1: float) -> 
     (k1, l1), (k2, l2) = segs
     if abs(k1 - k2) * (l1 + l2) ** 2 <= 1e-12 * (l1 + l2):
         k = (k1 * l1 + k2 * l2) / (l1 + l2)  # keeps the total turn, hence the end heading
-        return (Segment(0.0 if abs(k) * (l1 + l2) <= 1e-13 else k, l1 + l2),)
-    return tuple(Segment(0.0 if abs(k) * ln <= 1e-13 else k, ln) for k, ln in segs)
+        return (Segment(_straightened(k, l1 + l2), l1 + l2),)
+    return tuple(Segment(_straightened(k, ln), ln) for k, ln in segs)
+
+
+def _straightened(k: float, length: float) -> float:
+    """``k``, or 0 (a line) where the arc turns by less than 1e-13 or its radius exceeds a figure's
+    largest (:data:`~skatetrace.figures.figure.MAX_LENGTH`; a figure refuses such an arc)."""
+    return 0.0 if abs(k) * length <= 1e-13 or abs(k) < 1.0 / MAX_LENGTH else k
 
 
 def biarc(start: Pose, end: Pose) -> tuple[Segment, ...]:

@@ -34,7 +34,7 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from .biarcs import _biarc, _chain_poses
+from .biarcs import _biarc, _chain_poses, _straightened
 from .certify import _FAIL, _Cert, _certify
 from .corners import _wrap
 from .curves import Drawing, Path, Piece, _col, _direction, _gl_lengths, curvature, piece_length
@@ -199,9 +199,7 @@ class _Fitter:
             sinc = math.sin(half) / half if half != 0.0 else 1.0
             if sinc > 0.5:
                 k, L = 2.0 * math.sin(half) / d, d / sinc
-        if abs(k) * L <= 1e-13:
-            k = 0.0
-        return (Segment(k, L),)
+        return (Segment(_straightened(k, L), L),)
 
     def report(self, stage: str, piece: int) -> None:
         """Report the drawing's pieces before this path's ``piece`` done."""
