@@ -319,3 +319,44 @@ def test_the_scan_gives_up_weak_ramps_and_finds_the_same_stop(monkeypatch):
     assert capped.duration == pytest.approx(full.duration, rel=1e-14)
     # the weak ramps glide on for tens of lengths when integrated in full
     assert far_capped <= 8.0 * 1.5 * (1 + 1e-12) < max(ran)
+
+
+# ---- issue 17: short lines, whose stop needs a ramp weaker than the grid's weakest ----------------
+
+
+@pytest.mark.parametrize("length", [5e-4, 1e-3, 1.3e-3])
+@pytest.mark.parametrize("skater", [False, True])
+def test_a_line_shorter_than_the_grid_reaches_is_traced_and_verified(length, skater):
+    """A line of 1.3 mm or less (the paper's model, or a 1.7 m skater's at 2 m/s) failed "no stop of
+    length ... found": its stopping length falls as 1 / alpha, and even the grid's weakest ramp
+    stopped the blade short of it. The ramps below the grid bracket its stop."""
+    from skatetrace import Curve, Figure, Segment, TraceOptions, schedule_from_trace, skater_params, trace_figure, verify
+
+    params = skater_params(height=1.7) if skater else SleighParams()
+    speed = 2.0 if skater else 1.0
+    fig = Figure("short", (Curve((Segment(0.0, length),), (), name="short"),), params)
+    tr = trace_figure(fig, options=TraceOptions(speed=speed, workers=1))
+    assert tr.success, tr.message
+    schedule, _ = schedule_from_trace(tr)
+    assert verify(tr, schedule).success
+
+
+def test_the_ramps_below_the_grid_are_scanned_only_where_the_grid_has_no_bracket(monkeypatch):
+    from skatetrace.tracing import maneuver
+
+    scanned = []
+    real = maneuver._scan
+
+    def recorded(stopper, grid, length, coarse):
+        scanned.append(abs(grid[0]) * length**2)  # in natural units (speed 1)
+        return real(stopper, grid, length, coarse)
+
+    monkeypatch.setattr(maneuver, "_scan", recorded)
+    p = SleighParams()
+    a0 = 2.0 * (p.M + p.m) / p.m * 1e-3 + p.length_scale  # the line's apex before a 1 mm leg
+    assert solve_stop(p, [(0.0, 1e-3)], (a0, 0.0), 1.0).success  # a line of 2 mm: its half
+    assert all(g == pytest.approx(maneuver._GRID[0]) for g in scanned)
+    scanned.clear()
+    a0 = 2.0 * (p.M + p.m) / p.m * 2.5e-4 + p.length_scale
+    assert solve_stop(p, [(0.0, 2.5e-4)], (a0, 0.0), 1.0).success  # half a line of 0.5 mm
+    assert any(g < maneuver._GRID[0] * 1e-3 for g in scanned)

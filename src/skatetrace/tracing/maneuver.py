@@ -258,6 +258,12 @@ _GRID = np.geomspace(1e-3, 2e3, 29)
 # several legs at every point, since a stop that reaches a join where the curvature jumps makes the
 # stopping length jump too (plateaus at the join and spikes one grid point wide are seen).
 _COARSE = 4
+# Where neither sign of alpha has a bracket on the grid and its weakest ramp already stops the blade
+# short of the length, the scan goes on below it, down to a millionth of it, at the grid's ratio
+# (the last point is the grid's first; see _brackets). On a line the stopping length falls as
+# 1 / alpha, and a ramp of alpha ~ speed^2 / length is needed: below the grid for a line shorter
+# than about 1.3 mm (in model units, whatever the model's size).
+_BELOW = _GRID[0] * (_GRID[1] / _GRID[0]) ** -np.arange(27, -1, -1)
 # Accuracy of the integrations at the grid points (they only tell on which side of the length the
 # stop falls, and whether there is one) and of Brent's method on the bracket found.
 _GRID_RTOL, _GRID_ATOL = 1e-6, 1e-8
@@ -439,6 +445,35 @@ def _scan(stopper, grid, length, coarse):
     return None
 
 
+def _brackets(stopper, unit, length, coarse):
+    """The first bracket (:func:`_scan`) of each sign of alpha on the grid, in multiples ``unit``.
+
+    Where neither sign has one, each sign whose weakest ramp already stops the blade short of the
+    length is scanned again below the grid (:data:`_BELOW`).
+    """
+    any_found = False
+    for direction in (1.0, -1.0):
+        cand = _scan(stopper, direction * unit * _GRID, length, coarse)
+        if cand is not None:
+            any_found = True
+            yield cand
+    if any_found:
+        return
+    for direction in (1.0, -1.0):
+        if _stops_short(stopper, direction * unit * _GRID[0], length):
+            cand = _scan(stopper, direction * unit * _BELOW, length, coarse)
+            if cand is not None:
+                yield cand
+
+
+def _stops_short(stopper, alpha, length) -> bool:
+    """Whether the ramp ``alpha`` stops the blade before ``length`` (at the grid's accuracy)."""
+    try:
+        return abs(stopper.run(alpha, _GRID_RTOL, _GRID_ATOL)[1][4]) < length
+    except _NoStop:
+        return False
+
+
 def _guess(grid, i, j, length_at, length, root):
     """``(alpha, tau)`` interpolated on the bracket ``grid[i..j]`` or, where an end does not stop, ``root``'s."""
     li, lj = length_at(i, True), length_at(j, True)
@@ -567,10 +602,7 @@ def solve_stop(
     found = deferred = False
     best = None
     # One bracket per sign of alpha; prefer the sign that keeps the mass farther from the singular point.
-    for direction in (1.0, -1.0):
-        cand = _scan(stopper, direction * u_nat / t_nat * _GRID, length, _COARSE if len(legs_spec) == 1 else 1)
-        if cand is None:
-            continue
+    for cand in _brackets(stopper, u_nat / t_nat, length, _COARSE if len(legs_spec) == 1 else 1):
         found = True
         a1, a2, root, guess = cand
         sol = (None, None)
