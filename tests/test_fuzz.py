@@ -54,10 +54,18 @@ def test_no_section_traced_is_reported_as_data():
     assert not auto.success and not auto.rests
 
 
-def test_no_section_traced_cli_exits_1_and_writes_every_file(tmp_path, capsys):
-    """The issue's own case: a single 1.3 mm line traced at --size 1.3mm."""
+def test_no_section_traced_cli_exits_1_and_writes_every_file(tmp_path, capsys, monkeypatch):
+    """The issue's own case, a single 1.3 mm line traced at --size 1.3mm, crashed: it is traced and
+    verified now (its stop is bracketed below the ramps of the grid, 4fd1761). A line whose stop no
+    ramp brackets is reported as data: exit 1, every file written."""
+    from skatetrace.tracing import maneuver
+
     pts = tmp_path / "line.csv"
     pts.write_text("0,0\n1.3,0\n")
+    assert main(["trace", str(pts), "--size", "1.3mm", "--reach", "none", "--out", str(tmp_path / "o"),
+                 "--no-plots"]) == 0
+    capsys.readouterr()
+    monkeypatch.setattr(maneuver, "_brackets", lambda *args: iter(()))
     out = tmp_path / "out"
     # the launch-glide-stop tracer: the planner (the default in metres) does trace it, at 2e4 m/s^2
     assert main(["trace", str(pts), "--size", "1.3mm", "--reach", "none", "--out", str(out), "--no-plots"]) == 1

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import skatetrace as st
-from skatetrace.drawings.curves import BezierPiece, Drawing, LinePiece, Path
+from skatetrace.drawings.curves import BezierPiece, LinePiece, Path
 from skatetrace.drawings.specks import SPECK_RADIUS, find_specks, speck_circle
 from skatetrace.pipeline import trace_and_verify
 
@@ -88,7 +88,7 @@ def test_what_is_not_a_speck():
 
 def test_a_drawing_keeps_its_paths_in_order_with_the_specks_as_circles(tmp_path):
     svg = _svg(tmp_path, '<rect id="big" x="0" y="0" width="1000" height="600" fill="none" stroke="black"/>'
-                         f'<path id="sliver" d="M500 300 l0.07 0.15 l0.1 -0.15 z" stroke="black"/>'
+                         '<path id="sliver" d="M500 300 l0.07 0.15 l0.1 -0.15 z" stroke="black"/>'
                          '<circle id="ring" cx="300" cy="300" r="100" fill="none" stroke="black"/>')
     r = st.resolve(svg, size="6m", tol="1mm")
     assert [p.name for p in r.fit.paths] == ["big", "sliver", "ring"]
@@ -122,11 +122,11 @@ def test_ferris_sliver_is_traced_as_a_circle_and_verified(tmp_path, monkeypatch)
     assert len(find_specks(r.drawing, 1e-3, 2e-3 / 3)) == 1
     done = trace_and_verify(r.figure, r.figure.params, st.TraceOptions(speed=2.0))
     assert done.success, done.message
-    # traced as drawn (no specks), its stretches are sections no stop fits
+    assert len(r.figure.curves[1].sections()) == 1  # a smooth loop: no rest
+    # traced as drawn (no specks), its three stretches between corners are sections of their own, each
+    # started and stopped (sections of lines this short were ones no stop fitted before 4fd1761)
     import skatetrace.drawings.specks as specks
 
     monkeypatch.setattr(specks, "find_specks", lambda *args: {})
     drawn = st.resolve(svg, size="6m", tol="1mm")
-    assert len(drawn.figure.curves[1].pieces) > 1
-    failed = trace_and_verify(drawn.figure, drawn.figure.params, st.TraceOptions(speed=2.0), rests="never")
-    assert not failed.success and "no stop of length" in failed.message
+    assert len(drawn.figure.curves[1].pieces) > 1 and len(drawn.figure.curves[1].sections()) == 3

@@ -398,7 +398,7 @@ class Drawing:
     def absorbed(self, limit: float, corner_deg: float) -> tuple["Drawing", dict[str, float]]:
         """Every piece shorter than ``limit`` with a corner at both ends absorbed into its neighbours.
 
-        Such a piece is a section of its own, rest to rest, too short to launch and stop on (a
+        Such a piece is a section of its own, rest to rest within a millimetre or so (a
         closing line of a millimetre in an icon scaled to metres). Its ends are merged at its
         midpoint: the previous piece's end and the next piece's start move there
         (:class:`ShiftedEndPiece`: their tangents and curvatures at both ends kept), so no point

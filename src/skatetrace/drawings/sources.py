@@ -265,7 +265,7 @@ def _specks_note(drawing: Drawing, specks: dict, unit: str) -> str:
 
     names = [drawing.paths[i].name for i in specks]
     return (f"traced {len(specks)} path(s) too small to trace as drawn (within {SPECK_RADIUS:g} x the tolerance of "
-            f"their centres, their pieces too short to launch and stop on) as the circles they lie within "
+            f"their centres, their pieces sections of a fraction of a millimetre) as the circles they lie within "
             f"{ABSORB_SHARE:.3g} x the tolerance of (up to {max(s.bound for s in specks.values()):.3g} {unit} "
             f"away, certified; the fit's bound includes it): {', '.join(names[:5])}{' ...' if len(names) > 5 else ''}")
 
@@ -326,7 +326,7 @@ def _arc_fit(drawing: Drawing, tol_v: float, arc_mode: bool, method: str, unit: 
                      f"(up to {max(gaps.values()):.3g}; the fit's bound includes it): "
                      f"{', '.join(list(gaps)[:5])}{' ...' if len(gaps) > 5 else ''}")
     # A piece between two corners shorter than 2 ABSORB_SHARE times the tolerance is a section of its
-    # own, too short to launch and stop on: absorbed into its neighbours (moving the drawing by half its
+    # own, started and stopped within a millimetre: absorbed into its neighbours (moving the drawing by half its
     # length), where the fit still succeeds in what is left of the tolerance; else fitted as it is.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -355,8 +355,8 @@ def _arc_fit(drawing: Drawing, tol_v: float, arc_mode: bool, method: str, unit: 
         # The arc spline is tangent-continuous through a smooth join, so a join that turns by delta
         # displaces the rest of its run by about delta times its length: where that breaks the fit,
         # every join that could cost a tenth of the tolerance is made a corner (a rest) instead.
-        # A tiny piece between two of these corners is then a section of its own, too short to
-        # launch and stop on (0.43 mm in an icon at 6 m): absorbed as above, where the fit allows.
+        # A tiny piece between two of these corners is then a section of its own, started and
+        # stopped within it (0.43 mm in an icon at 6 m): absorbed as above, where the fit allows.
         def sharp_fit(d, t):
             return fit_drawing(d, t, method=method, corner_tol_deg=tight, soft_corners=False)
 

@@ -1,7 +1,7 @@
 """Specks: paths too small to trace as drawn, traced as the circle they lie close to.
 
 At skater scale an illustration's highlight or stray dot is a path of a millimetre or two whose
-stretches between corners are fractions of a millimetre: sections too short to launch and stop on.
+stretches between corners are fractions of a millimetre: sections started and stopped within them.
 Absorbing its tiny pieces into their neighbours (:meth:`~skatetrace.drawings.curves.Drawing.absorbed`)
 cannot help a path made of nothing else. Such a path, within :data:`SPECK_RADIUS` tolerances of its
 centre and within a share of the tolerance of a circle (a certified Hausdorff bound,
