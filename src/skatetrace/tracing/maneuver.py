@@ -317,8 +317,8 @@ class _Stopper:
         hit, tf, yf = final_state(self.params, self.y0, self.coef, switches, alpha, self.t_max, rtol=rtol,
                                   atol=atol, stop_event=True, singular_limit=self.singular_limit,
                                   max_nfev=_MAX_EVALUATIONS)
-        if hit == "reached" and abs(yf[4]) >= switches[-1]:
-            raise _Beyond
+        if hit == "reached" and switches is not self.switches and abs(tf) < abs(self.t_max):
+            raise _Beyond  # ended where the last leg does (to the event's rounding), before the time allowed
         if hit != "stopped":
             raise _NoStop
         return tf, yf
