@@ -203,6 +203,14 @@ class _Phase:
     segment: int | None = None  # piece where the phase starts (planned phases; else the glide's)
 
 
+def _leg_motion(params: SleighParams, man: ManeuverSolution, leg, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """On ``leg`` of manoeuvre ``man`` at its local times ``t`` (unit speed): the states ``(p1, p2, a, b, s)``
+    (rows) and the control rates ``adot, bdot`` that hold the leg's curvature."""
+    y = leg.sol(t)
+    adot, bdot, _ = constrained_rates(params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3], man.control(t))
+    return y, adot, bdot
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class SectionTrace:
     """Controls that trace one section exactly, with the solver's report.
@@ -322,9 +330,7 @@ class SectionTrace:
             for j in np.unique(which):
                 leg, m = legs[j], which == j
                 tj = np.clip(tl[m], los[j], his[j])
-                y = leg.sol(tj)
-                ad, bd, _ = constrained_rates(self.params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3],
-                                              man.control(tj))
+                y, ad, bd = _leg_motion(self.params, man, leg, tj)
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
                     vals[key][m] = val
                 vseg[m] = segidx[j]
@@ -582,8 +588,7 @@ def _step_samples(trace: SectionTrace) -> dict[str, np.ndarray]:
             sol = leg.sol
             tl = np.clip((sol.t_old[:, None] + sol.h[:, None] * _STEP_FRACTIONS).ravel(),
                          min(leg.t0, leg.t1), max(leg.t0, leg.t1))
-            y = sol(tl)
-            adot, bdot, _ = constrained_rates(params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3], man.control(tl))
+            y, adot, bdot = _leg_motion(params, man, leg, tl)
             times.append(trace._section_time(ph, tl))
             rows.append(np.vstack([y[:4], adot, bdot]))
     t, first = np.unique(np.concatenate(times), return_index=True)
