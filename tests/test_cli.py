@@ -548,6 +548,23 @@ def test_a_drawing_too_large_to_plan_by_default_is_traced_with_the_launch_glide_
     assert json.loads((out / "result.json").read_text())["options"]["reach"] is None
 
 
+def test_a_default_plan_that_spends_its_budget_is_given_up_for_the_launch_glide_stop_manoeuvres(tmp_path, capsys,
+                                                                                                monkeypatch):
+    # a plan not asked for is bounded in IPOPT's work (pipeline.DEFAULT_PLAN_BUDGET): icons of 12 to
+    # 41 pieces spent 14 to 43 s planning, where the launch-glide-stop trace takes 1 to 3 s
+    import skatetrace.pipeline as pipeline
+
+    monkeypatch.setitem(pipeline.trace_within_default_reach.__kwdefaults__, "max_work", 1000)
+    out = tmp_path / "o"
+    assert main(["trace", "school:loop", "--out", str(out), "--no-plots", "--no-viewer"]) == 0
+    printed = capsys.readouterr().out
+    assert re.search(r"note: the plan was given up within the default reach 0\.4896 m \(reach 0\.4896: not planned: "
+                     r"the planning budget of 1,000 \(IPOPT iterations x unknowns\) was spent after 1 program "
+                     r"\([\d,]+\)\); traced with the launch-glide-stop manoeuvres instead \(as --reach none\)\. "
+                     r"Give --reach auto to plan it", printed), printed
+    assert json.loads((out / "result.json").read_text())["options"]["reach"] is None
+
+
 def test_the_default_reach_plans_all_or_nothing_and_wholly_where_nothing_else_traces(tmp_path, capsys, monkeypatch):
     # the default reach stops planning at a section without a plan (the launch-glide-stop
     # manoeuvres trace the figure then); where they fail too, the whole plan is made and kept

@@ -10,7 +10,7 @@ import pytest
 import skatetrace as st
 from skatetrace.dynamics.integrator import _rhs
 from skatetrace.figures.figure import figure_from_dict
-from skatetrace.pipeline import DEFAULT_PLAN_UNKNOWNS, too_large_to_plan
+from skatetrace.pipeline import DEFAULT_PLAN_BUDGET, DEFAULT_PLAN_UNKNOWNS, too_large_to_plan
 from skatetrace.planning.planner import figure_unknowns as planner_figure_unknowns
 from skatetrace.planning.planner import plan_figure
 from skatetrace.planning.symbolic import sleigh_functions
@@ -600,23 +600,14 @@ def test_sections_without_a_pinned_plan_are_planned_again_side_by_side(monkeypat
                 if job[1].start_position is not None and job[2] is None else sol for job, sol in zip(jobs, sols)]
 
     monkeypatch.setattr(planner, "solve_programs", pinned_fail)
-    direct = []
-    solve_program = planner.solve_program
-    monkeypatch.setattr(planner, "solve_program", lambda *a, **k: direct.append(a) or solve_program(*a, **k))
     solved = planner._presolved([(specs, popts)], 2)
-    batched, _bad, links = planner._warm_start(specs, popts, solved)
-    assert not direct  # every program came from a batch
     assert [stage for stage, _n in batches] == ["warm starts", "warm starts with free ends",
                                                  "warm starts pinned again"]
     assert batches[1][1] == 2  # both sections, with free ends
-
-    def fail_pinned_alone(sections, options, guess=None, meshes=None):
-        if options.start_position is not None and guess is None:
-            return ProgramSolution(success=False, status="Maximum_Iterations_Exceeded", message="mocked")
-        return solve_program(sections, options, guess=guess, meshes=meshes)
-
-    monkeypatch.setattr(planner, "solve_program", fail_pinned_alone)
+    batched, _bad, links = planner._warm_start(specs, popts, solved)
+    assert len(batches) == 3  # every program came from the batches: none was solved again
     alone, _bad, links_alone = planner._warm_start(specs, popts, {})  # one after another, as before
+    assert [n for _stage, n in batches[3:]] == [1] * (len(batches) - 3)
     assert links == links_alone
     for a, b in zip(batched.states, alone.states):
         np.testing.assert_array_equal(a, b)
@@ -658,6 +649,80 @@ def test_all_or_nothing_plans_no_curve_further_once_a_section_has_no_plan(monkey
         st.TraceOptions(reach=1.0, all_or_nothing=1)
 
 
+def _pivot_and_arc():
+    import copy
+
+    data = copy.deepcopy(CUSPS["pivot"])
+    data["curves"].append({"pieces": [{"type": "arc", "radius": 1.2, "sweep_deg": 90}]})
+    return figure_from_dict(data)
+
+
+def test_a_plan_that_spends_its_budget_reports_every_section_not_planned_as_data():
+    from skatetrace.planning.pool import spending
+
+    fig = _pivot_and_arc()
+    options = st.TraceOptions(reach=1.0, reach_hint=False)
+    with spending(10**12) as counted:  # a plan without a budget of its own counts against the caller's
+        free = plan_figure(fig, options=options)
+    assert free.success and counted.spent > 0
+    within = plan_figure(fig, options=dataclasses.replace(options, plan_budget=counted.spent))
+    assert within.success
+    for a, b in zip(free.sections, within.sections):
+        assert a.residuals == b.residuals and a.duration == b.duration
+    for budget in (counted.spent - 1, 0):
+        short = plan_figure(fig, options=dataclasses.replace(options, plan_budget=budget))
+        assert not short.success and len(short.sections) == len(free.sections)
+        for sec in short.sections:
+            assert sec.status is st.TraceStatus.OVER_BUDGET and not sec.phases
+            assert f"reach 1: not planned: the planning budget of {budget:,} (IPOPT iterations x unknowns)" \
+                in sec.message
+
+
+def test_a_budget_spent_while_a_later_curve_is_mended_keeps_the_curves_finished_before(monkeypatch):
+    from skatetrace.planning import planner
+    from skatetrace.planning.pool import BudgetSpent
+
+    real, calls = planner._mended, []
+
+    def spent_on_the_second_curve(*args):
+        calls.append(args[5])  # the curve's index
+        if len(calls) == 2:
+            raise BudgetSpent("the planning budget of 7 (IPOPT iterations x unknowns) was spent after 9 programs (8)")
+        return real(*args)
+
+    monkeypatch.setattr(planner, "_mended", spent_on_the_second_curve)
+    trace = plan_figure(_pivot_and_arc(), options=st.TraceOptions(reach=1.0, reach_hint=False, plan_budget=10**12))
+    assert calls == [0, 1]
+    first, second, arc = trace.sections
+    assert first.success and second.success
+    assert arc.status is st.TraceStatus.OVER_BUDGET and "was spent after 9 programs" in arc.message
+
+
+def test_the_default_reach_keeps_the_launch_glide_stop_trace_where_the_plan_spends_its_budget():
+    fig = figure_from_dict(CUSPS["pivot"])
+    options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never", max_work=0)
+    assert kept.fell_back == "over budget" and "the planning budget of 0 (IPOPT iterations x unknowns)" in kept.reason
+    assert kept.result.success and kept.options.reach is None and kept.result.trace.options.reach is None
+    # the budget the options carry is the one spent, and without a bound the plan is kept
+    for opts, work in ((dataclasses.replace(options, plan_budget=10**12), 0), (options, None)):
+        kept = st.trace_within_default_reach(fig, None, opts, rests="never", max_work=work)
+        assert kept.result.success and kept.fell_back == "" and kept.options.reach == 1.0
+
+
+def test_the_largest_school_figure_is_planned_well_within_the_default_budget():
+    # DEFAULT_PLAN_BUDGET bounds a plan the user did not ask for; the school figures (planned by
+    # default) spend 97,000 to 756,000 units, the paragraph double three the most
+    from skatetrace.planning.pool import spending
+
+    options = st.TraceOptions(speed=2.0, reach=0.288 * 1.7, reach_hint=False, all_or_nothing=True)
+    with spending(10**12) as counted:
+        trace = plan_figure(st.school_figure("paragraph-double-three", height=1.7), st.skater_params(height=1.7),
+                            options)
+    assert trace.success, trace.message
+    assert 0 < counted.spent < 0.9 * DEFAULT_PLAN_BUDGET, counted.spent
+
+
 def test_the_default_reach_gives_up_a_plan_whose_replay_fails_for_the_launch_glide_stop_trace(mocked_plans):
     # a plan is exact to its finish's residuals (1e-10 at the shooting joins): on a 6 m line with the
     # mass behind the blade the open loop grew them to 8e-6 at a tolerance of 6e-6 (w3c-styling-css-01-b)
@@ -671,7 +736,9 @@ def test_the_default_reach_gives_up_a_plan_whose_replay_fails_for_the_launch_gli
     # where the launch-glide-stop trace fails too, the plan and its failure are kept
     made = mocked_plans(plan_verifies=False, unbounded_verifies=False)
     kept = st.trace_within_default_reach(fig, None, options, rests="never")
-    assert (kept.fell_back, kept.reason) == ("", "") and kept.options is options
+    # made with the options given and the default reach's budget
+    assert (kept.fell_back, kept.reason) == ("", "")
+    assert kept.options == dataclasses.replace(options, plan_budget=DEFAULT_PLAN_BUDGET)
     assert not kept.result.success and kept.result.trace.options.reach == 1.0
     # a plan that verifies is kept without tracing anything else
     made = mocked_plans(plan_verifies=True)

@@ -128,3 +128,58 @@ def test_the_default_never_fills_a_many_core_machine(jobs, serial, monkeypatch):
     assert made == [pool.DEFAULT_MAX_WORKERS]
     for a, b in zip(again[:2], serial):
         _same(a, b)
+
+
+def _work(sol):
+    return sol.iterations * sol.unknowns
+
+
+def test_a_budget_counts_iterations_times_unknowns_and_stops_at_the_program_that_spends_it(jobs, serial, pools_made):
+    first, second = (_work(s) for s in serial)
+    assert first > 0 and second > 0 and all(s.unknowns > 0 for s in serial)
+    with pool.spending(first + second) as budget:  # enough: both solved, as without a budget
+        again = pool.solve_programs(jobs, workers=1)
+    assert (budget.spent, budget.programs) == (first + second, 2)
+    for a, b in zip(serial, again):
+        _same(a, b)
+    # one unit short: the second program stops where it alone would spend what is left (at most one
+    # iteration more), and the batch raises; the same on one worker or two
+    for workers in (1, 2):
+        with pool.spending(first + second - 1) as budget, pytest.raises(pool.BudgetSpent, match="planning budget"):
+            pool.solve_programs(jobs, workers=workers)
+        assert budget.programs == 2 and first + second - 1 < budget.spent <= first + second
+    assert pools_made == [2]
+    # spent already: a later batch solves nothing
+    with pool.spending(first - 1) as budget:
+        with pytest.raises(pool.BudgetSpent):
+            pool.solve_programs(jobs[:1], workers=1)
+        with pytest.raises(pool.BudgetSpent, match="before this batch"):
+            pool.solve_programs(jobs[1:], workers=1)
+        assert budget.programs == 1
+    # outside a block nothing is counted, and an inner block replaces an outer one until it ends
+    with pool.spending(10**12) as outer:
+        with pool.spending(None) as inner:
+            pool.solve_programs(jobs[:1], workers=1)
+        assert inner is None and outer.spent == 0
+        pool.solve_programs(jobs[:1], workers=1)
+        assert outer.spent == first
+
+
+def test_a_program_given_what_is_left_of_a_budget_stops_one_iteration_past_it(jobs, serial):
+    spec, opts, _guess, _meshes = jobs[0]
+    full = serial[0]
+    n = full.unknowns
+    capped = pool.solve_program(spec, opts, max_work=5 * n)
+    assert not capped.success and capped.status == "Maximum_Iterations_Exceeded" and capped.iterations == 6
+    assert _work(capped) > 5 * n
+    # a program that needs less than it is given is the same as without
+    _same(pool.solve_program(spec, opts, max_work=_work(full)), full)
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "1000"])
+def test_a_budget_must_be_a_whole_number_of_units(bad):
+    with pytest.raises(ValueError, match="planning budget must be a whole number"):
+        with pool.spending(bad):
+            pass
+    with pytest.raises(ValueError, match="plan_budget must be a whole number"):
+        st.TraceOptions(reach=1.0, plan_budget=bad)

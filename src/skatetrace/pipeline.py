@@ -239,6 +239,14 @@ def _sampled_and_verified(trace, rel_tol: float):
 #: (``bench/CORPUS.md``, 2026-11-26).
 DEFAULT_PLAN_UNKNOWNS = 12_000
 DEFAULT_PLAN_PIECES = 32
+#: The most IPOPT work (iterations times unknowns, summed over the programs:
+#: :attr:`TraceOptions.plan_budget`) :func:`trace_within_default_reach` spends on a plan. The
+#: school figures for a 1.7 m skater spend 97,000 to 756,000 (the paragraph double three), 0.8 to
+#: 6.5 s of IPOPT on one core. Of 65 icons of nine icon sets, 14 under the limits above spent 1.06
+#: to 4.5 million, 8.7 to 33 s of IPOPT, where their launch-glide-stop trace takes 1 to 3 s, and
+#: none of their plans was humanly feasible (2026-11-27; IPOPT's time grows as the unknowns^1.16
+#: an iteration, so the product of the two is a fair measure).
+DEFAULT_PLAN_BUDGET = 1_000_000
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -246,7 +254,8 @@ class DefaultReachTrace:
     """What :func:`trace_within_default_reach` made: the result kept and the options it was made with.
 
     ``fell_back`` says why the launch-glide-stop trace was kept instead of a plan: ``"too large"``
-    (the figure is larger than the default reach plans: it was not planned),
+    (the figure is larger than the default reach plans: it was not planned), ``"over budget"``
+    (the planning spent its budget, :data:`DEFAULT_PLAN_BUDGET`, before the plan was made),
     ``"unplanned"`` (a section has no plan) or ``"unverified"`` (the plan's replay failed the
     verification), and ``reason`` says more; both are empty where the plan (or, failing
     everything, the whole plan) is kept. ``unknowns`` is the size of the figure's programs.
@@ -294,7 +303,8 @@ def too_large_to_plan(figure: Figure, params: SleighParams | None, options: Trac
 def trace_within_default_reach(figure: Figure, params: SleighParams | None, options: TraceOptions, *,
                                rests: str = "auto", rel_tol: float = 1e-6, limits: HumanLimits | None = None,
                                progress=None, max_unknowns: int | None = DEFAULT_PLAN_UNKNOWNS,
-                               max_pieces: int | None = DEFAULT_PLAN_PIECES) -> DefaultReachTrace:
+                               max_pieces: int | None = DEFAULT_PLAN_PIECES,
+                               max_work: int | None = DEFAULT_PLAN_BUDGET) -> DefaultReachTrace:
     """A reach the user did not ask for: the plan within ``options.reach`` where it traces and verifies
     the figure, else the launch-glide-stop manoeuvres (``reach=None``) where they do.
 
@@ -307,6 +317,8 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
       minutes, and the launch-glide-stop trace is kept whatever its
       outcome (a drawing of 150 pieces whose trace failed a section failed its plan too, after
       175 s);
+    - the planning spends more than ``max_work`` (:attr:`TraceOptions.plan_budget`, unless
+      ``options`` has one): the launch-glide-stop trace is kept whatever its outcome, as above;
     - a section has no plan, and it traces every section. Planned all or nothing
       (``options.all_or_nothing``), no curve is planned further once a section has no plan; where
       the launch-glide-stop trace fails too, the whole plan (every curve planned as far as it goes,
@@ -322,6 +334,8 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
         With ``reach`` set; the rest as for :func:`trace_and_verify`.
     max_unknowns, max_pieces : int or None
         The largest figure planned (None: any).
+    max_work : int or None
+        The planning's budget where ``options.plan_budget`` is None (None: no bound).
 
     Returns
     -------
@@ -338,9 +352,15 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     if beyond:
         return DefaultReachTrace(result=run(unbounded), options=unbounded, unknowns=size, fell_back="too large",
                                  reason=beyond)
+    if options.plan_budget is None:
+        options = replace(options, plan_budget=max_work)
     done = run(options)
     if done.success:
         return DefaultReachTrace(result=done, options=options, unknowns=size)
+    spent = next((s.message for s in done.trace.sections if s.status is TraceStatus.OVER_BUDGET), None)
+    if spent is not None:
+        return DefaultReachTrace(result=run(unbounded), options=unbounded, unknowns=size, fell_back="over budget",
+                                 reason=spent)
     bad = [s for s in done.trace.sections if not s.success]
     # a reason, not "skipped" (all or nothing)
     failed = next((s for s in bad if s.status is not TraceStatus.NOT_PLANNED), bad[0]).message if bad else None

@@ -393,10 +393,11 @@ def _traced(args, res, drawn, t0: float) -> int:
                                               limits=limits, progress=progress)
             if kept.fell_back:
                 what = {"too large": "this figure is not planned within",
+                        "over budget": "the plan was given up within",
                         "unplanned": "not every section could be planned within",
                         "unverified": "the plan's replay failed the verification within"}[kept.fell_back]
-                ask = ("Give --reach auto to plan it (tens of seconds or more)" if kept.fell_back == "too large"
-                       else "Give --reach to see the plan and its failures")
+                ask = ("Give --reach auto to plan it (tens of seconds or more)"
+                       if kept.fell_back in ("too large", "over budget") else "Give --reach to see the plan and its failures")
                 print(f"note: {what} the default reach {options.reach:.4g} m ({kept.reason}); traced with the "
                       f"launch-glide-stop manoeuvres instead (as --reach none). {ask}")
             done, options = kept.result, kept.options

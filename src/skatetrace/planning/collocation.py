@@ -146,7 +146,11 @@ class ProgramOptions:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ProgramSolution:
-    """IPOPT's answer: per section the node times, states and controls, and the solver's report."""
+    """IPOPT's answer: per section the node times, states and controls, and the solver's report.
+
+    ``iterations`` are IPOPT's and ``unknowns`` the program's size (both 0 where no solve ran):
+    their product is the work a plan's budget counts (:func:`skatetrace.planning.pool.spending`).
+    """
 
     success: bool
     status: str
@@ -156,6 +160,7 @@ class ProgramSolution:
     controls: tuple[np.ndarray, ...] = ()
     objective: float = math.nan
     iterations: int = 0
+    unknowns: int = 0
     meshes: tuple = ()
     stats: dict = field(default_factory=dict)
 
@@ -293,7 +298,8 @@ def program_too_large(sections: list[SectionSpec], options: ProgramOptions) -> s
     return _too_large(layout, n, options)
 
 
-def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=None, meshes=None) -> ProgramSolution:
+def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=None, meshes=None,
+                  max_work: int | None = None) -> ProgramSolution:
     """Build and solve the program of a chain of sections (one curve, or the unit of a repeated one).
 
     ``guess`` (optional) is a :class:`ProgramSolution` of the same sections to start from; by
@@ -301,12 +307,15 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     ``(0, b_g)``, ``b_g`` half the reach on the side away from the singular points.
     ``meshes`` (optional) gives per section and piece the mesh nodes (any increasing times; only
     their proportions count), e.g. a refined :attr:`ProgramSolution.meshes`; ``guess`` must then
-    be given on the same nodes. Never raises for a program IPOPT cannot solve: the result says so,
+    be given on the same nodes. ``max_work`` (optional) bounds IPOPT's iterations to one more
+    than it over the program's unknowns: a program stopped there has spent more than ``max_work``
+    (what is left of a plan's budget, :func:`skatetrace.planning.pool.spending`). Never raises
+    for a program IPOPT cannot solve: the result says so,
     also where CasADi or IPOPT stop with an error (out of memory, say: ``status="solver_error"``).
     """
     with recording_interrupts() as caught:
         try:
-            return _solve_program(sections, options, guess, meshes)
+            return _solve_program(sections, options, guess, meshes, max_work)
         except (RuntimeError, MemoryError) as exc:  # CasADi raises RuntimeError for its own and IPOPT's errors
             if caught:  # Ctrl-C inside CasADi (building the program, say), which made it an error: stop
                 raise KeyboardInterrupt from None
@@ -316,7 +325,8 @@ def solve_program(sections: list[SectionSpec], options: ProgramOptions, guess=No
     return ProgramSolution(success=False, status="solver_error", message=f"the solver stopped: {reason}")
 
 
-def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, meshes) -> ProgramSolution:
+def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, meshes,
+                   max_work: int | None = None) -> ProgramSolution:
     o = options
     layout, n = _layout(sections, o, meshes)
     refused = _too_large(layout, n, o)  # before anything symbolic is built
@@ -400,7 +410,8 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     # the circle eight's warm start took 284 iterations, both programs 240 before).
     res = prog.solve({"print_time": False, "error_on_fail": False, "ipopt.print_level": o.print_level,
                       "ipopt.sb": "yes", "ipopt.mu_strategy": o.barrier, "ipopt.mu_init": o.mu_init,
-                      "ipopt.max_iter": o.iterations_for(n), "ipopt.tol": o.tol})
+                      "ipopt.max_iter": o.iterations_for(n) if max_work is None else
+                      min(o.iterations_for(n), max_work // max(n, 1) + 1), "ipopt.tol": o.tol})
     ok, status = res.success, res.status
     message = status.replace("_", " ").lower()
     if not ok and status in _STALLED:
@@ -429,7 +440,7 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     return ProgramSolution(success=ok, status=status, message=message,
                            times=tuple(times), states=tuple(states), controls=tuple(controls),
                            meshes=tuple(tuple(lay.nodes for lay in lays) for *_, lays in layout),
-                           objective=res.objective, iterations=res.iterations,
+                           objective=res.objective, iterations=res.iterations, unknowns=n,
                            stats={k: res.stats[k] for k in ("t_wall_total",) if k in res.stats})
 
 

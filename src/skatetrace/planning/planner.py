@@ -28,6 +28,7 @@ finish does not converge as ``TraceStatus.RESIDUAL``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import pickle
@@ -40,11 +41,10 @@ from ..figures.figure import Figure
 from ..figures.geometry import end_pose
 from ..tracing.maneuver import _singular_distances
 from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceStatus, _Phase, _with_metrics
-from .collocation import (PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, program_too_large, program_unknowns,
-                          solve_program)
+from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, program_too_large, program_unknowns
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
-from .pool import solve_programs
+from .pool import BudgetSpent, solve_programs, spending
 
 __all__ = ["plan_figure", "curve_specs", "figure_unknowns", "DURATION_PER_LENGTH", "TOP_SPEED"]
 
@@ -248,7 +248,7 @@ def _warm_start(specs, popts: ProgramOptions, solved: dict | None = None
     def solve(spec, start, end, guess=None):
         key, sign = _warm_key(spec, start, end, popts.reach, guess is not None)
         if key not in solved:  # with guess: a free plan of the same section, pulled onto the pins
-            solved[key] = (solve_program(*_warm_job(spec, popts, start, end, guess)), sign)
+            solved[key] = (solve_programs([_warm_job(spec, popts, start, end, guess)], 1, "warm starts")[0], sign)
         return _cached(solved, spec, start, end, popts.reach, guess is not None)
 
     large = next((k for k, spec in enumerate(specs) if program_too_large([spec], popts)), None)
@@ -325,7 +325,7 @@ def smallest_reach(spec: SectionSpec, popts: ProgramOptions) -> float | None:
     for factor in _LARGER_REACHES:
         wider = dataclasses.replace(popts, reach=popts.reach * factor, singular_clearance=popts.singular_clearance * factor,
                                     closing_turn=None)
-        if solve_program([dataclasses.replace(spec, turn=0.0)], wider).success:
+        if solve_programs([([dataclasses.replace(spec, turn=0.0)], wider, None, None)], 1, "larger reaches")[0].success:
             return popts.reach * factor
     return None
 
@@ -549,6 +549,9 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     may jump, ``"jump"`` where even its position could not be: see :func:`_plan_curves`), the
     impulse on the mass in N s (``link_impulse``) and the jump of its position (``link_jump``,
     zero up to round-off unless ``"jump"``).
+    With ``options.plan_budget``, the programs' IPOPT work is bounded (:func:`~skatetrace.planning.pool.spending`):
+    once it is spent, no further program is solved, and the sections of the curves not yet
+    finished are ``OVER_BUDGET``, saying so (the curves finished before are kept).
     Never raises for a figure that cannot be planned: the sections that fail say why.
     """
     if options.reach is None:
@@ -563,38 +566,61 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     for curve in figure.curves:
         specs, sections = curve_specs(curve)
         curves.append((specs, sections, dataclasses.replace(popts, closing_turn=_closing_turn(curve, sections))))
-    plans = _plan_curves([(specs, curve_opts) for specs, _sections, curve_opts in curves], options.workers,
-                         options.all_or_nothing)
-    # all or nothing: where a curve has a section without a plan, no curve is finished
-    stop = next((f"reach {options.reach:.4g}: not planned: section {bad} of curve {ci} has no motion within the reach "
-                 "(all or nothing)" for ci, (plan, bad, *_rest) in enumerate(plans) if plan is None),
-                None) if options.all_or_nothing else None
-    for ci, ((specs, sections, curve_opts), (plan, bad, links, linked, candidate)) in enumerate(zip(curves, plans)):
+    spent = None  # why the budget stopped the planning (options.plan_budget), once it has
+    # without a budget of its own, the plan counts against a caller's (pool.spending), if any
+    with contextlib.nullcontext() if options.plan_budget is None else spending(int(options.plan_budget)):
         try:
-            if stop is not None and plan is not None:
-                curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
-            elif plan is None:
-                curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
-            else:
-                curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params,
-                                                                           options, fn)
-                if curve_traces is None:
-                    curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-            # A plan whose exact motion diverges can reach numbers that the finish or the mesh
-            # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
-            # the default reach, vivus-hi-there). The curve is reported as not planned, with the
-            # error, and the other curves are still planned (the command line then falls back to
-            # the launch-glide-stop manoeuvres), instead of the whole run ending in a traceback.
-            why = f"reach {options.reach:.4g}: the planner failed on this curve ({type(exc).__name__}: {exc})"
-            curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, why) for sec in sections]
-        for tr in curve_traces:
-            traces.append(tr)
-            starts.append(t)
-            t += tr.duration if tr.phases else 0.0
-            if progress is not None:
-                progress(len(traces), total)
+            plans = _plan_curves([(specs, curve_opts) for specs, _sections, curve_opts in curves], options.workers,
+                                 options.all_or_nothing)
+        except BudgetSpent as exc:
+            plans, spent = [(None, None, (), False, None)] * len(curves), str(exc)
+        # all or nothing: where a curve has a section without a plan, no curve is finished
+        stop = next((f"reach {options.reach:.4g}: not planned: section {bad} of curve {ci} has no motion within the "
+                     "reach (all or nothing)" for ci, (plan, bad, *_rest) in enumerate(plans) if plan is None),
+                    None) if options.all_or_nothing and spent is None else None
+        for ci, (curve, plan) in enumerate(zip(curves, plans)):
+            curve_traces, spent = _planned_curve(curve, plan, ci, params, options, fn, stop, spent)
+            for tr in curve_traces:
+                traces.append(tr)
+                starts.append(t)
+                t += tr.duration if tr.phases else 0.0
+                if progress is not None:
+                    progress(len(traces), total)
     return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))
+
+
+def _planned_curve(curve, entry, ci, params, options, fn, stop: str | None, spent: str | None
+                   ) -> tuple[list[SectionTrace], str | None]:
+    """A curve of :func:`plan_figure` finished (``entry``: its entry of :func:`_plan_curves`), and why the budget is spent.
+
+    ``stop`` says why no curve is finished (all or nothing), ``spent`` why the budget stopped the
+    planning (every section of this curve is then ``OVER_BUDGET``), if either did.
+    """
+    (specs, sections, curve_opts), (plan, bad, links, linked, candidate) = curve, entry
+    if spent is not None:
+        return [_failed(sec, ci, params, options, TraceStatus.OVER_BUDGET, f"reach {options.reach:.4g}: not planned: "
+                        f"{spent}") for sec in sections], spent
+    try:
+        if stop is not None and plan is not None:
+            curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
+        elif plan is None:
+            curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
+        else:
+            curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params,
+                                                                       options, fn)
+            if curve_traces is None:
+                curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
+    except BudgetSpent as exc:
+        return _planned_curve(curve, entry, ci, params, options, fn, stop, str(exc))
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        # A plan whose exact motion diverges can reach numbers that the finish or the mesh
+        # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
+        # the default reach, vivus-hi-there). The curve is reported as not planned, with the
+        # error, and the other curves are still planned (the command line then falls back to
+        # the launch-glide-stop manoeuvres), instead of the whole run ending in a traceback.
+        why = f"reach {options.reach:.4g}: the planner failed on this curve ({type(exc).__name__}: {exc})"
+        curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, why) for sec in sections]
+    return curve_traces, None
 
 
 def _mended(plan, links, linked, specs, sections, ci, params, options, popts, fn) -> list[SectionTrace]:

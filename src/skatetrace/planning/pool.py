@@ -10,21 +10,82 @@ not depend on ``workers``.
 
 Whoever wants to see a long planning run move (the command line) registers a callback with
 :func:`reporting`; every batch then tells it, program by program, how far it is.
+
+Whoever wants a plan only if it comes cheaply (the command line's default reach, a plan the user
+did not ask for) bounds its work with :func:`spending`: the programs' IPOPT iterations times their
+unknowns, counted in the order of the jobs, so that where the budget runs out does not depend on
+the machine's speed or on ``workers``.
 """
 
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Callable
+import contextvars
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 
 from ..processes import DEFAULT_MAX_WORKERS, available_workers, run_jobs
 from ..progress import Channel
 from .collocation import ProgramSolution, solve_program
 
-__all__ = ["available_workers", "solve_programs", "reporting", "DEFAULT_MAX_WORKERS"]
+__all__ = ["available_workers", "solve_programs", "reporting", "spending", "BudgetSpent", "WorkBudget",
+           "DEFAULT_MAX_WORKERS"]
 
 # The planner's batches, program by program (see reporting).
 _PROGRESS = Channel("planning")
+# The budget of the innermost spending block, if any.
+_BUDGET: contextvars.ContextVar[WorkBudget | None] = contextvars.ContextVar("plan budget", default=None)
+
+
+class BudgetSpent(Exception):
+    """Raised by :func:`solve_programs` once the programs solved within a :func:`spending` block have spent its budget."""
+
+
+@dataclass(slots=True)
+class WorkBudget:
+    """The IPOPT work a plan may spend (``limit``), and what its programs have spent so far.
+
+    A program's work is its iterations times its unknowns
+    (:attr:`~skatetrace.planning.collocation.ProgramSolution.unknowns`): IPOPT's time grows with
+    both, some 6 to 12 us a unit on one core of this project's 2-core machine (the time an
+    iteration grows with the program's size).
+    """
+
+    limit: int
+    spent: int = 0
+    programs: int = 0
+
+    def charge(self, sol: ProgramSolution) -> None:
+        """Count ``sol``'s work; raise :class:`BudgetSpent` once the total is over the limit."""
+        self.spent += int(sol.iterations) * int(sol.unknowns)
+        self.programs += 1
+        if self.spent > self.limit:
+            raise BudgetSpent(f"the planning budget of {self.limit:,} (IPOPT iterations x unknowns) was spent after "
+                              f"{self.programs} program{'' if self.programs == 1 else 's'} ({self.spent:,})")
+
+
+@contextlib.contextmanager
+def spending(limit: int | None) -> Iterator[WorkBudget | None]:
+    """Within the ``with`` block, :func:`solve_programs` counts every program's work against ``limit``.
+
+    Once the total passes it, the batch stops (the jobs not yet solved are dropped, their workers
+    ended) and :class:`BudgetSpent` is raised. The work is added in the order of the jobs, so the
+    same programs are solved before the budget runs out on any machine and with any ``workers``.
+    ``limit`` None counts nothing (yields None). Per thread and per task, like :func:`reporting`.
+
+    Raises
+    ------
+    ValueError
+        If ``limit`` is not a whole number >= 0 or None.
+    """
+    if limit is not None and (isinstance(limit, bool) or not isinstance(limit, int) or limit < 0):
+        raise ValueError(f"a planning budget must be a whole number >= 0 or None, got {limit!r}")
+    budget = None if limit is None else WorkBudget(limit)
+    token = _BUDGET.set(budget)
+    try:
+        yield budget
+    finally:
+        _BUDGET.reset(token)
 
 
 def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractContextManager[None]:
@@ -39,8 +100,8 @@ def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractCon
 
 
 def _solve(job: tuple) -> ProgramSolution:
-    sections, options, guess, meshes = job
-    return solve_program(sections, options, guess=guess, meshes=meshes)
+    sections, options, guess, meshes, max_work = job
+    return solve_program(sections, options, guess=guess, meshes=meshes, max_work=max_work)
 
 
 def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "programs") -> list[ProgramSolution]:
@@ -60,9 +121,25 @@ def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "
     -------
     list of ProgramSolution
         One per job, in the order of ``jobs``.
+
+    Raises
+    ------
+    BudgetSpent
+        Within a :func:`spending` block, once the programs have spent its budget.
     """
+    budget = _BUDGET.get()
+    if budget is not None and budget.spent > budget.limit:
+        raise BudgetSpent(f"the planning budget of {budget.limit:,} was spent before this batch")
+    # each program stops where it alone would spend what is left: past it the budget is spent anyway
+    left = None if budget is None else budget.limit - budget.spent
     out = []
-    for sol in run_jobs(_solve, jobs, workers):
-        out.append(sol)
-        _PROGRESS.report(stage, len(out), len(jobs))
+    solved = run_jobs(_solve, [(*job, left) for job in jobs], workers)
+    try:
+        for sol in solved:
+            out.append(sol)
+            _PROGRESS.report(stage, len(out), len(jobs))
+            if budget is not None:
+                budget.charge(sol)
+    finally:
+        solved.close()  # where the budget ran out: the jobs not started are dropped, the workers ended
     return out

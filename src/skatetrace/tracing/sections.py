@@ -53,6 +53,7 @@ class TraceStatus(Enum):
     EXCURSION = "the mass would have to move implausibly far or the blade stall inside the section"
     INFEASIBLE = "no motion of the mass within the reach traces the section"
     NOT_PLANNED = "the planner did not converge on the curve"
+    OVER_BUDGET = "the planner spent its budget before the section was planned"
 
 
 #: Accepted glide speeds (model length per time unit, or m/s).
@@ -121,6 +122,11 @@ class TraceOptions:
         ``NOT_PLANNED``, naming that section. For a caller that uses a plan only if every section
         has one (the command line's default reach falls back to the launch-glide-stop
         manoeuvres): a drawing of 22 sections spent 30 of its 60 s planning curves it then set aside.
+    plan_budget : int or None
+        With a reach: the most work the plan may take, IPOPT's iterations times the program's
+        unknowns summed over its programs (:func:`skatetrace.planning.pool.spending`); past it the
+        sections not yet planned are ``OVER_BUDGET``. None (default): no bound. The command
+        line's default reach, a plan not asked for, has one (:data:`skatetrace.pipeline.DEFAULT_PLAN_BUDGET`).
     workers : int or None
         Processes in which independent work runs side by side: the planner's programs (the
         distinct sections' warm starts, the curves' linked programs) and the tracer's distinct
@@ -145,6 +151,7 @@ class TraceOptions:
     max_mass_speed: float | None = None
     reach_hint: bool = True
     all_or_nothing: bool = False
+    plan_budget: int | None = None
     workers: int | None = None
 
     def __post_init__(self) -> None:
@@ -169,6 +176,9 @@ class TraceOptions:
         if not (isinstance(self.max_placements, int) and not isinstance(self.max_placements, bool)
                 and self.max_placements >= 1):
             raise ValueError(f"max_placements must be a whole number >= 1, got {self.max_placements!r}")
+        if self.plan_budget is not None and (isinstance(self.plan_budget, bool) or
+                                             not isinstance(self.plan_budget, (int, np.integer)) or self.plan_budget < 0):
+            raise ValueError(f"plan_budget must be a whole number >= 0, or None (no bound), got {self.plan_budget!r}")
         if self.workers is not None and not (isinstance(self.workers, (int, np.integer)) and not isinstance(self.workers, bool)
                                              and 1 <= self.workers <= 1024):
             raise ValueError(f"workers must be a whole number from 1 to 1024, or None (every core), got {self.workers!r}")
