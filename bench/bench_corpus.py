@@ -59,6 +59,7 @@ def measure(name: str, reach: float | str | None) -> dict:
     failed = next((s.message for s in done.trace.sections if not s.success), done.message)
     return {"file": name, "outcome": "verified" if done.success else "not verified",
             "reason": ({"too large": "launch-glide-stop (too large to plan by default)",
+                        "over budget": "launch-glide-stop (the plan spent its budget)",
                         "unplanned": "launch-glide-stop (not every section planned)",
                         "unverified": "launch-glide-stop (the plan's replay failed the verification)"}.get(fell_back, ""))
             + ("" if done.success else failed), "fit_s": t1 - t0, "trace_s": time.perf_counter() - t1,
