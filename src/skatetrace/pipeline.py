@@ -242,7 +242,7 @@ DEFAULT_PLAN_PIECES = 32
 #: The most IPOPT work (iterations times unknowns, summed over the programs:
 #: :attr:`TraceOptions.plan_budget`) :func:`trace_within_default_reach` spends on a plan. The
 #: school figures for a 1.7 m skater spend 97,000 to 756,000 (the paragraph double three), 0.8 to
-#: 6.5 s of IPOPT on one core. Of 65 icons of nine icon sets, 14 under the limits above spent 1.06
+#: 6.5 s of IPOPT on one core. Of 65 icons of nine icon sets, 13 under the limits above spent 1.06
 #: to 4.5 million, 8.7 to 33 s of IPOPT, where their launch-glide-stop trace takes 1 to 3 s, and
 #: none of their plans was humanly feasible (2026-11-27; IPOPT's time grows as the unknowns^1.16
 #: an iteration, so the product of the two is a fair measure).
