@@ -597,30 +597,32 @@ def _planned_curve(curve, entry, ci, params, options, fn, stop: str | None, spen
     planning (every section of this curve is then ``OVER_BUDGET``), if either did.
     """
     (specs, sections, curve_opts), (plan, bad, links, linked, candidate) = curve, entry
+    curve_traces = None
+    if spent is None:
+        try:
+            if stop is not None and plan is not None:
+                curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
+            elif plan is None:
+                curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
+            else:
+                curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params,
+                                                                           options, fn)
+                if curve_traces is None:
+                    curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
+        except BudgetSpent as exc:
+            spent = str(exc)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+            # A plan whose exact motion diverges can reach numbers that the finish or the mesh
+            # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
+            # the default reach, vivus-hi-there). The curve is reported as not planned, with the
+            # error, and the other curves are still planned (the command line then falls back to
+            # the launch-glide-stop manoeuvres), instead of the whole run ending in a traceback.
+            why = f"reach {options.reach:.4g}: the planner failed on this curve ({type(exc).__name__}: {exc})"
+            curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, why) for sec in sections]
     if spent is not None:
-        return [_failed(sec, ci, params, options, TraceStatus.OVER_BUDGET, f"reach {options.reach:.4g}: not planned: "
-                        f"{spent}") for sec in sections], spent
-    try:
-        if stop is not None and plan is not None:
-            curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
-        elif plan is None:
-            curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
-        else:
-            curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params,
-                                                                       options, fn)
-            if curve_traces is None:
-                curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
-    except BudgetSpent as exc:
-        return _planned_curve(curve, entry, ci, params, options, fn, stop, str(exc))
-    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-        # A plan whose exact motion diverges can reach numbers that the finish or the mesh
-        # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
-        # the default reach, vivus-hi-there). The curve is reported as not planned, with the
-        # error, and the other curves are still planned (the command line then falls back to
-        # the launch-glide-stop manoeuvres), instead of the whole run ending in a traceback.
-        why = f"reach {options.reach:.4g}: the planner failed on this curve ({type(exc).__name__}: {exc})"
-        curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, why) for sec in sections]
-    return curve_traces, None
+        curve_traces = [_failed(sec, ci, params, options, TraceStatus.OVER_BUDGET,
+                                f"reach {options.reach:.4g}: not planned: {spent}") for sec in sections]
+    return curve_traces, spent
 
 
 def _mended(plan, links, linked, specs, sections, ci, params, options, popts, fn) -> list[SectionTrace]:
