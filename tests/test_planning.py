@@ -687,9 +687,11 @@ def _pivot_and_arc():
     return figure_from_dict(data)
 
 
-def test_a_plan_that_spends_its_budget_reports_every_section_not_planned_as_data():
+def test_a_plan_that_spends_its_budget_reports_every_section_not_planned_as_data(monkeypatch):
+    from skatetrace.planning import planner
     from skatetrace.planning.pool import spending
 
+    monkeypatch.setattr(planner, "_LINKED_SHARE", 1.0)  # the linked program may spend all that is left (next test)
     fig = _pivot_and_arc()
     options = st.TraceOptions(reach=1.0, reach_hint=False)
     with spending(10**12) as counted:  # a plan without a budget of its own counts against the caller's
@@ -706,6 +708,42 @@ def test_a_plan_that_spends_its_budget_reports_every_section_not_planned_as_data
             assert sec.status is st.TraceStatus.OVER_BUDGET and not sec.phases
             assert f"reach 1: not planned: the planning budget of {budget:,} (IPOPT iterations x unknowns)" \
                 in sec.message
+
+
+def test_a_linked_program_under_a_budget_leaves_the_rest_to_finish_the_chain(monkeypatch):
+    # The linked program only improves the chain of warm starts: given all that is left (share 1),
+    # one that would need a unit more spends the budget and nothing is planned (test above); at
+    # its share it stops short, and the chain (or its last iterate, finished) is the plan
+    from skatetrace.planning import planner, pool
+    from skatetrace.planning.pool import spending
+
+    batches = []
+    real = pool.solve_programs
+
+    def recorded(jobs, workers=None, stage="programs", share=1.0):
+        sols = real(jobs, workers, stage, share)
+        batches.append((stage, share, [s.iterations * s.unknowns for s in sols], [(s.status, s.unknowns) for s in sols]))
+        return sols
+
+    monkeypatch.setattr(planner, "solve_programs", recorded)
+    fig = _pivot_and_arc()
+    options = st.TraceOptions(reach=1.0, reach_hint=False)
+    with spending(10**12) as counted:
+        plan_figure(fig, options=options)
+    (warm, _s, warm_work, _st), (linked, share, linked_work, linked_status) = batches
+    assert (warm, linked, share) == ("warm starts", "linked programs", planner._LINKED_SHARE)
+    assert linked_status[0][0] == "Solve_Succeeded"
+    budget = counted.spent - 1
+    left = budget - sum(warm_work)
+    assert linked_work[0] > planner._LINKED_SHARE * left  # the program needs more than its share
+    batches.clear()
+    with spending(10**12) as spent:
+        trace = plan_figure(fig, options=dataclasses.replace(options, plan_budget=budget))
+    assert trace.success and all(sec.status is st.TraceStatus.SUCCESS for sec in trace.sections)
+    (_w, _s, again, _st), (_l, _share, capped, status) = batches[:2]
+    assert again == warm_work and status[0][0] == "Maximum_Iterations_Exceeded"
+    assert capped[0] <= planner._LINKED_SHARE * left + status[0][1]  # one iteration past its part, at most
+    assert spent.spent <= budget
 
 
 def test_a_budget_spent_while_a_later_curve_is_mended_keeps_the_curves_finished_before(monkeypatch):

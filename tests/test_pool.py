@@ -165,6 +165,26 @@ def test_a_budget_counts_iterations_times_unknowns_and_stops_at_the_program_that
         assert outer.spent == first
 
 
+def test_a_batch_given_a_share_of_a_budget_leaves_the_rest_for_what_follows(jobs, serial):
+    # the linked programs' batch (the planner's share 0.75): each program stops after its part of
+    # the share, with the status of one out of iterations, and no BudgetSpent is raised
+    first, second = (_work(s) for s in serial)
+    limit = 2 * (first + second)
+    with pool.spending(limit) as budget:
+        capped = pool.solve_programs(jobs, workers=1, share=0.4 * min(first, second) / limit)
+        assert budget.spent <= 0.4 * min(first, second) + sum(s.unknowns for s in serial)
+        for sol, full in zip(capped, serial):
+            assert not sol.success and sol.status == "Maximum_Iterations_Exceeded"
+            assert 0 < sol.iterations < full.iterations
+        # the rest is there for the next batch, which is given all of it (the default share 1)
+        again = pool.solve_programs(jobs, workers=1)
+    for a, b in zip(serial, again):
+        _same(a, b)
+    # outside a spending block the share counts for nothing
+    for a, b in zip(serial, pool.solve_programs(jobs, workers=1, share=0.01)):
+        _same(a, b)
+
+
 def test_a_program_given_what_is_left_of_a_budget_stops_one_iteration_past_it(jobs, serial):
     spec, opts, _guess, _meshes = jobs[0]
     full = serial[0]

@@ -104,7 +104,8 @@ def _solve(job: tuple) -> ProgramSolution:
     return solve_program(sections, options, guess=guess, meshes=meshes, max_work=max_work)
 
 
-def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "programs") -> list[ProgramSolution]:
+def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "programs",
+                   share: float = 1.0) -> list[ProgramSolution]:
     """:func:`~skatetrace.planning.collocation.solve_program` on every job, in order.
 
     Parameters
@@ -116,6 +117,11 @@ def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "
         :data:`DEFAULT_MAX_WORKERS`; 1 (or a batch of one) solves them here, one after another.
     stage : str
         What the batch is, for the callback of :func:`reporting`.
+    share : float
+        Within a :func:`spending` block, the share of what is left of its budget that the batch
+        may spend, split evenly between its programs: each stops (IPOPT's
+        ``Maximum_Iterations_Exceeded``) after its part, and the rest is kept for what follows
+        (1: every program may spend all that is left, and the budget is spent where they do).
 
     Returns
     -------
@@ -130,8 +136,11 @@ def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "
     budget = _BUDGET.get()
     if budget is not None and budget.spent > budget.limit:
         raise BudgetSpent(f"the planning budget of {budget.limit:,} was spent before this batch")
-    # each program stops where it alone would spend what is left: past it the budget is spent anyway
+    # each program stops where it alone would spend what is left (past it the budget is spent
+    # anyway), or its part of the batch's share of it
     left = None if budget is None else budget.limit - budget.spent
+    if left is not None and share < 1.0:
+        left = int(share * left) // max(len(jobs), 1)
     out = []
     solved = run_jobs(_solve, [(*job, left) for job in jobs], workers)
     try:
