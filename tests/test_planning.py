@@ -231,36 +231,6 @@ def test_a_mirrored_section_is_the_mirror_image_of_the_motion():
     np.testing.assert_array_equal(_mirrored(plan).states[0], flip[:, None] * states)
 
 
-def test_the_default_guess_holds_the_mass_inside_the_turn_or_on_the_pins_side_of_a_line():
-    from skatetrace.planning.collocation import PieceSpec, SectionSpec, guess_side
-    from skatetrace.planning.planner import _warm_key
-
-    arc = SectionSpec((PieceSpec((0.0, 0.0, 0.0, 0.0), 0.5), PieceSpec((0.8, 0.0, 0.0, 0.0), 2.0)))
-    assert guess_side(arc) == -1 and guess_side(arc, (0.3, 0.2), (0.0, 0.3)) == -1  # a left turn: b < 0
-    line = SectionSpec((PieceSpec((0.0, 0.0, 0.0, 0.0), 3.0),))
-    assert guess_side(line) == 1 and guess_side(line, (0.3, 0.0), None) == 1
-    assert guess_side(line, (0.3, 0.0), (0.04, -0.28)) == -1 and guess_side(line, None, (0.0, -0.1)) == -1
-    assert guess_side(line, (0.3, 0.1), (0.0, -0.1)) == 1
-    # a line pinned to the right is the mirror image of one pinned to the left: one program
-    (key, sign), (key_m, sign_m) = (_warm_key(line, (0.3, 0.0), (0.04, b), 0.48) for b in (0.28, -0.28))
-    assert key == key_m and sign == -sign_m
-    assert _warm_key(line, (0.3, 0.1), (0.0, -0.1), 0.48)[0] != _warm_key(line, (0.3, -0.1), (0.0, 0.1), 0.48)[0]
-
-
-def test_a_line_pinned_to_the_right_is_planned_as_the_mirror_image_of_one_pinned_to_the_left():
-    # a warm start of chevron-collapse-sharp (ionicons) at 6 m for a 1.7 m skater: with the guess
-    # on the left whatever the pins, the right one took 335 IPOPT iterations to 3.4 times the effort
-    from skatetrace.planning.collocation import PieceSpec, ProgramOptions, SectionSpec, solve_program
-
-    line = [SectionSpec((PieceSpec((0.0, 0.0, 0.0, 0.0), 3.3238475953145294),), 0.0, 4.154809494143162)]
-    base = dict(M=0.658, m=0.342, I=0.0074025, reach=0.479808, singular_clearance=0.07344, continuous_velocity=False,
-                impulse_time=0.2, top_speed=2.0, tol=1e-6, start_position=(0.2878848, 0.0))
-    left, right = (solve_program(line, ProgramOptions(**base, end_position=(0.0409176, b))) for b in (0.2849621, -0.2849621))
-    assert left.success and right.success
-    assert right.objective == pytest.approx(left.objective, rel=1e-6)
-    np.testing.assert_allclose(right.states[0][[0, 3]], -left.states[0][[0, 3]], atol=1e-6)
-
-
 def test_the_mesh_of_a_symmetric_section_has_no_interval_of_round_off():
     # A bracket's section is symmetric about its middle join, where a node of the section's mesh
     # falls within round-off of the join: left in, its interval of 1e-16 made IPOPT's Hessian NaN.

@@ -29,8 +29,8 @@ from .nlp import SparseProgram
 from ..processes import recording_interrupts
 from .symbolic import sleigh_functions
 
-__all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "guess_side",
-           "program_too_large", "program_unknowns", "solve_program"]
+__all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "program_too_large",
+           "program_unknowns", "solve_program"]
 
 _DEGREE = 3
 #: IPOPT's ends that may still leave a feasible point, and the largest constraint violation of one.
@@ -210,22 +210,6 @@ def _mesh(spec: SectionSpec, duration: float, n: int):
     return out, s_v
 
 
-def guess_side(spec: SectionSpec, start=None, end=None) -> int:
-    """The side of the blade (``+1``: ``b > 0``) on which :func:`solve_program`'s default guess holds the mass.
-
-    Inside the turn of the section's longest piece; on a straight one, the side of the pins
-    ``start`` and ``end`` (the mass's ``(a, b)``, None where free), by the sign of their ``b``
-    summed, or ``+1``. (Always ``+1`` on a line, the warm starts of chevron-collapse-sharp's lines
-    pinned to the right took 134 and 335 IPOPT iterations to plans of 4 and 3.4 times the effort
-    of their mirror images, which took 68 and 71 with the guess on the right.)
-    """
-    kg = max(spec.pieces, key=lambda p: p.length).coefficients[0]
-    if kg != 0.0:
-        return -1 if kg > 0 else 1
-    pinned = sum(q[1] for q in (start, end) if q is not None)
-    return -1 if pinned < 0 else 1
-
-
 def _kappa(cf, s, s0):
     sigma = s - s0
     return cf[0] + sigma * (cf[1] + sigma * (cf[2] + sigma * cf[3]))
@@ -357,9 +341,9 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     prev_end = None  # (x, cf, s0) at the end of the previous section
     first_start = None
     durations = []
-    for k, (spec, (duration, default_mesh, s_v, lays)) in enumerate(zip(sections, layout)):
-        b_guess = 0.5 * o.reach * guess_side(spec, o.start_position if k == 0 else None,
-                                             o.end_position if k == len(sections) - 1 else None)
+    for spec, (duration, default_mesh, s_v, lays) in zip(sections, layout):
+        kg = max(spec.pieces, key=lambda p: p.length).coefficients[0]
+        b_guess = -0.5 * o.reach if kg > 0 else 0.5 * o.reach
         s_start = 0.0
         x_prev_piece = None
         for j, (piece, lay) in enumerate(zip(spec.pieces, lays)):

@@ -41,8 +41,7 @@ from ..figures.figure import Figure
 from ..figures.geometry import end_pose
 from ..tracing.maneuver import _singular_distances
 from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceStatus, _Phase, _with_metrics
-from .collocation import (PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, guess_side, program_too_large,
-                          program_unknowns)
+from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, program_too_large, program_unknowns
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
 from .pool import BudgetSpent, solve_programs, spending
@@ -161,15 +160,8 @@ def _pin_key(q, sign, reach: float):
 
 
 def _warm_key(spec: SectionSpec, start, end, reach: float, guessed: bool = False):
-    """What makes two warm-start programs the same up to a mirror, and the mirror's sign.
-
-    A straight section has no sign of its own: it takes its pins' side
-    (:func:`~skatetrace.planning.collocation.guess_side`, where its default guess holds the mass),
-    so that a line pinned to the right is solved as the mirror image of one pinned to the left.
-    """
+    """What makes two warm-start programs the same up to a mirror, and the mirror's sign."""
     key, sign = _shape_key(spec)
-    if not any(c for p in spec.pieces for c in p.coefficients):
-        sign = guess_side(spec, start, end)
     return (key, _pin_key(start, sign, reach), _pin_key(end, sign, reach), guessed), sign
 
 
