@@ -183,6 +183,9 @@ def test_a_batch_given_a_share_of_a_budget_leaves_the_rest_for_what_follows(jobs
     # outside a spending block the share counts for nothing
     for a, b in zip(serial, pool.solve_programs(jobs, workers=1, share=0.01)):
         _same(a, b)
+    for bad in (0.0, -0.5, 1.5, float("nan")):
+        with pytest.raises(ValueError, match="share of the planning budget"):
+            pool.solve_programs(jobs, workers=1, share=bad)
 
 
 def test_a_program_given_what_is_left_of_a_budget_stops_one_iteration_past_it(jobs, serial):

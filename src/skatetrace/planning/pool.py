@@ -132,7 +132,11 @@ def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "
     ------
     BudgetSpent
         Within a :func:`spending` block, once the programs have spent its budget.
+    ValueError
+        If ``share`` is not in (0, 1].
     """
+    if not 0.0 < share <= 1.0:  # also refuses NaN
+        raise ValueError(f"a batch's share of the planning budget must be in (0, 1], got {share!r}")
     budget = _BUDGET.get()
     if budget is not None and budget.spent > budget.limit:
         raise BudgetSpent(f"the planning budget of {budget.limit:,} was spent before this batch")
