@@ -208,6 +208,41 @@ def test_version_in_process_and_as_python_m(capsys):
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
 
 
+def test_the_script_runs_main_then_keeps_the_collector_off_the_exit(monkeypatch, capsys):
+    import gc
+    import importlib.metadata as md
+
+    from skatetrace.cli import entry
+
+    frozen = []
+    monkeypatch.setattr(gc, "freeze", lambda: frozen.append(True))  # this test process must not freeze
+    assert entry.script(["--version"]) == 0 and frozen == [True]
+    assert capsys.readouterr().out.startswith("skatetrace ")
+    assert entry.script(["trace"]) == 2 and frozen == [True, True]  # a usage error too
+
+    def failing(argv):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(entry, "main", failing)
+    with pytest.raises(RuntimeError, match="a bug"):  # the traceback is Python's, as from main
+        entry.script([])
+    assert len(frozen) == 3
+    scripts = [ep for ep in md.entry_points(group="console_scripts") if ep.name == "skatetrace"]
+    if scripts:  # installed: the script is this entry, not main
+        assert scripts[0].value == "skatetrace.cli:script"
+
+
+def test_the_process_ends_soon_after_its_last_line(tmp_path):
+    # The exit's collections took 0.4 s after a trace (numba's and CasADi's objects); the script
+    # skips them. Time is not asserted (machines differ): the collector's state at exit is.
+    code = ("import atexit, gc, sys; from skatetrace.cli import script; "
+            "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 0)); "
+            "sys.exit(script(['trace', 'line', '--out', sys.argv[1], '--no-plots', '--no-viewer']))")
+    proc = subprocess.run([sys.executable, "-c", code, str(tmp_path / "o")], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.rstrip().endswith("frozen True")
+
+
 def test_version_falls_back_to_the_packages_own(monkeypatch):
     import importlib.metadata as md
 
