@@ -3,7 +3,9 @@
 import casadi as ca
 import numpy as np
 
-from skatetrace.planning.nlp import SparseProgram
+import scipy.sparse as sps
+
+from skatetrace.planning.nlp import SparseProgram, _dm
 
 
 def _program(N: int = 5) -> SparseProgram:
@@ -36,6 +38,23 @@ def test_the_assembled_hessian_is_the_lagrangians():
         want = np.array(auto(x, s, lg))
         got = np.array(mine(x, [], s, lg))
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+
+
+def test_a_scipy_matrix_becomes_the_dm_casadi_makes_of_it():
+    # duplicates (summed), rows out of order within a column, an explicit zero and empty columns
+    rows, cols = np.array([3, 0, 3, 1, 0, 2]), np.array([0, 0, 0, 2, 2, 5])
+    data = np.array([1.5, -2.0, 0.25, 0.0, 7.0, 1e-300])
+    a = sps.csc_matrix((data, (rows, cols)), shape=(4, 7))
+    a.indices[:2] = a.indices[1::-1].copy()  # unsorted, as a matrix built by hand may be
+    a.data[:2] = a.data[1::-1].copy()
+    a.has_sorted_indices = False
+    want = ca.DM(sps.csc_matrix(a.toarray()))
+    got = _dm(a)
+    assert got.sparsity().get_triplet() == ca.DM(a.tocoo().tocsc()).sparsity().get_triplet()
+    np.testing.assert_array_equal(np.array(got), np.array(want))
+    assert got.nnz() == 5  # (3, 0) summed, the explicit zero kept as CasADi keeps it
+    big = sps.random(300, 2000, density=1e-2, format="csc", random_state=3)
+    assert ca.norm_inf(_dm(big) - ca.DM(big)) == 0 and _dm(big).sparsity() == ca.DM(big).sparsity()
 
 
 def test_the_program_evaluates_its_blocks_and_rows_in_order():
