@@ -78,6 +78,27 @@ def test_the_closed_loop_holds_the_long_arc_on_the_figure(arcs):
     np.testing.assert_array_equal(closed.state[:, rep.section != 2], rep.state[:, rep.section != 2])
 
 
+def test_the_closed_loop_gives_the_same_numbers_side_by_side_as_one_after_another(arcs, monkeypatch):
+    # the sections' laws and replays run in forked workers where they can; asked out of order,
+    # each section's rows must still come back to it
+    import skatetrace.processes as processes
+
+    trace, _, rep = arcs
+    order = [2, 0, 1]
+    forked = _closed_loop(trace, rep, order)
+    monkeypatch.setattr(processes, "can_fork", lambda: False)
+    serial = _closed_loop(trace, rep, order)
+    np.testing.assert_array_equal(forked[0].state, serial[0].state)
+    np.testing.assert_array_equal(forked[0].controls, serial[0].controls)
+    assert forked[1] == serial[1] and forked[2] == serial[2]
+    # section 2's closed loop alone is the same, row for row: no section got another's answer
+    alone = _closed_loop(trace, rep, [2])
+    rows = rep.section == 2
+    assert 2 in forked[1] and forked[1][2] == alone[1][2] and forked[2][2] == alone[2][2]
+    np.testing.assert_array_equal(forked[0].state[:, rows], alone[0].state[:, rows])
+    assert not np.array_equal(forked[0].state[:, rows], rep.state[:, rows])
+
+
 def test_a_schedule_that_is_not_the_trace_is_never_vouched_for_by_the_closed_loop(arcs):
     trace, schedule, _ = arcs
     f = np.where(schedule.section == 2, 1.0 + 1e-7, 1.0)

@@ -625,29 +625,11 @@ def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dic
     a phosphor spiral's end speed between 0.7 and 2.3 times its limit under such changes), and
     then its verdict is no more than one run's digits.
     """
-    from ..feedback.closed_loop import replay_law
-    from ..feedback.lqr import TrackingLaw, default_gains, design
-    from ..feedback.reference import section_reference
-
     params = trace.params
-    runs = {}
-    for si in sections:
-        ref = section_reference(trace.sections[si], params)
-        law = design(ref, params, default_gains(trace.figure.size()))
-        if not law.success:
-            continue
-        z0 = ref.state_at(0.0)[0][:, 0]
-        m = np.flatnonzero(rep.section == si)
-        t = np.clip(rep.t[m] - trace.start_times[si], 0.0, ref.duration)
-        out = []
-        for f in (1.0, 1.0 + PERTURBATION, 1.0 - PERTURBATION):
-            scaled = law if f == 1.0 else TrackingLaw(reference=ref, t=law.t, K=law.K * f, params=params)
-            z, rates, correction, ok = replay_law(ref, scaled, params, z0, t)
-            if not ok:
-                break
-            out.append((z, rates, correction))
-        if len(out) == 3:
-            runs[si] = (m, out)  # else no closed-loop verdict: the open loop's stands
+    rows = {si: np.flatnonzero(rep.section == si) for si in sections}
+    # the sections' laws and replays are independent: side by side (the same numbers either way)
+    done = map_forked(partial(_closed_loop_runs, trace, rep), [(si, rows[si]) for si in sections])
+    runs = {si: (rows[si], out) for si, out in zip(sections, done) if out is not None}
     closed = []
     for k in range(3):
         state, controls = rep.state.copy(), rep.controls.copy()
@@ -660,6 +642,33 @@ def _closed_loop(trace: FigureTrace, rep: Replay, sections) -> tuple[Replay, dic
     spreads = {si: {"perturbation": PERTURBATION, "position_spread": xy, "cusp_speed_spread": v}
                for si, (xy, v) in _spreads(params, closed[0], closed[1:], {si: m for si, (m, _) in runs.items()}).items()}
     return closed[0], corrections, spreads
+
+
+def _closed_loop_runs(trace: FigureTrace, rep: Replay, job: tuple[int, np.ndarray]) -> list | None:
+    """Section ``si``'s closed loop at the replay's rows ``m`` (``job = (si, m)``), under the law and
+    under its gains scaled by ``1 +- PERTURBATION``: three ``(states, rates, correction)``, or None
+    where the law could not be designed or a run could not be integrated (the open loop's verdict
+    stands)."""
+    from ..feedback.closed_loop import replay_law
+    from ..feedback.lqr import TrackingLaw, default_gains, design
+    from ..feedback.reference import section_reference
+
+    si, m = job
+    params = trace.params
+    ref = section_reference(trace.sections[si], params)
+    law = design(ref, params, default_gains(trace.figure.size()))
+    if not law.success:
+        return None
+    z0 = ref.state_at(0.0)[0][:, 0]
+    t = np.clip(rep.t[m] - trace.start_times[si], 0.0, ref.duration)
+    out = []
+    for f in (1.0, 1.0 + PERTURBATION, 1.0 - PERTURBATION):
+        scaled = law if f == 1.0 else TrackingLaw(reference=ref, t=law.t, K=law.K * f, params=params)
+        z, rates, correction, ok = replay_law(ref, scaled, params, z0, t)
+        if not ok:
+            return None
+        out.append((z, rates, correction))
+    return out
 
 
 def check_rel_tol(rel_tol) -> None:
