@@ -270,22 +270,21 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nf
     As *= s[None, None, :]
     Bs *= (1 / s)[None, :, None]
 
-    def coeffs(tt):
-        j = min(max(int(np.searchsorted(t, tt, side="right")) - 1, 0), t.size - 2)
-        h = t[j + 1] - t[j]
-        w = (tt - t[j]) / h if h > 0 else 0.0
-        return (1 - w) * As[j] + w * As[j + 1], (1 - w) * Bs[j] + w * Bs[j + 1]
-
     count = [0]
+    eye, last = np.eye(7), t.size - 2
 
     def riccati(tt, pv):
+        # called some ten thousand times a section: the coefficients interpolated inline
         count[0] += 1
-        if count[0] > max_nfev or not np.all(np.isfinite(pv)):
+        if count[0] > max_nfev or not np.isfinite(pv).all():
             raise _Stop
         P = pv.reshape(7, 7)
-        Aj, Bj = coeffs(tt)
+        j = min(max(int(t.searchsorted(tt, side="right")) - 1, 0), last)
+        h = t[j + 1] - t[j]
+        w = (tt - t[j]) / h if h > 0 else 0.0
+        Aj, Bj = (1 - w) * As[j] + w * As[j + 1], (1 - w) * Bs[j] + w * Bs[j + 1]
         PB = P @ Bj
-        dP = -(Aj.T @ P + P @ Aj - (PB * Rinv) @ PB.T + np.eye(7))
+        dP = -(Aj.T @ P + P @ Aj - (PB * Rinv) @ PB.T + eye)
         return dP.ravel()
 
     T = float(t[-1])
