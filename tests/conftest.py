@@ -51,6 +51,7 @@ def mocked_plans(monkeypatch):
     import dataclasses
 
     import skatetrace.pipeline as pipeline
+    from skatetrace import processes
     from skatetrace.tracing.sections import trace_figure
     from skatetrace.verification.verify import verify as real_verify
 
@@ -74,6 +75,8 @@ def mocked_plans(monkeypatch):
             return trace_figure(figure, params, options, progress=progress, cache=cache)
 
         monkeypatch.setattr(pipeline, "plan_figure", plan)
+        # the launch-glide-stop trace made here, where ``made`` sees it (not beside the plan, in a child)
+        monkeypatch.setattr(pipeline, "Background", lambda fn, workers=None, idle=False: processes.Background(fn, 1))
         monkeypatch.setattr(pipeline, "verify", verify)
         monkeypatch.setattr(pipeline, "trace_figure", trace)
         return made

@@ -748,6 +748,32 @@ def test_the_default_reach_keeps_the_launch_glide_stop_trace_where_the_plan_spen
         assert kept.result.success and kept.fell_back == "" and kept.options.reach == 1.0
 
 
+def test_the_launch_glide_stop_trace_made_beside_the_plan_is_the_one_kept(monkeypatch):
+    # it is made in a child on what the planner leaves idle; here the child is waited for, as when
+    # the planning took long enough, and its answer is the one made here without it
+    import skatetrace.pipeline as pipeline
+    from skatetrace import processes
+
+    class Waited(processes.Background):
+        def ready(self):
+            return self._child is not None and self._child._receive.poll(300)
+
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
+    monkeypatch.setattr(pipeline, "Background", Waited)
+    made_here = []
+    real = pipeline.trace_and_verify
+    monkeypatch.setattr(pipeline, "trace_and_verify", lambda *a, **k: made_here.append(a[2].reach) or real(*a, **k))
+    fig = figure_from_dict(CUSPS["pivot"])
+    options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True, workers=2)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never", max_work=0)
+    assert kept.fell_back == "over budget" and kept.result.success and kept.options.reach is None
+    assert made_here == [1.0]  # the plan; the launch-glide-stop trace came from the child
+    direct = real(fig, None, kept.options, rests="never")
+    for name in ("t", "a", "b", "adot", "bdot"):
+        np.testing.assert_array_equal(getattr(kept.result.schedule, name), getattr(direct.schedule, name))
+    assert kept.result.report.max_deviation == direct.report.max_deviation
+
+
 def test_the_largest_school_figure_is_planned_well_within_the_default_budget():
     # DEFAULT_PLAN_BUDGET bounds a plan the user did not ask for; the school figures (planned by
     # default) spend 97,000 to 756,000 units, the paragraph double three the most

@@ -192,6 +192,34 @@ def test_leaving_the_block_ends_a_child_still_at_work(forking):
     assert not child.is_alive() and child.exitcode is not None
 
 
+def test_an_idle_background_child_runs_at_the_lowest_priority_and_says_when_it_is_done(forking):
+    import time
+
+    here = os.nice(0)
+    with processes.Background(lambda: os.nice(0), 2, idle=True) as job:
+        deadline = time.monotonic() + 60
+        while not job.ready() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert job.ready()
+        assert job.result() == min(19, here + processes.IDLE_NICENESS)
+    with processes.Background(lambda: os.nice(0), 2) as job:  # not idle: this process's own
+        assert job.result() == here
+
+
+def test_a_background_child_not_yet_done_is_not_ready_and_can_be_cancelled(forking, monkeypatch):
+    import time
+
+    with processes.Background(lambda: time.sleep(60), 2, idle=True) as job:
+        assert not job.ready()
+        child = job._child._process
+        job.cancel()  # ended at once, not waited for
+        assert not child.is_alive() and child.exitcode is not None and not job.ready()
+    # without a child there is nothing to wait for, and nothing ready: the caller computes here
+    monkeypatch.setattr(processes, "can_fork", lambda: False)
+    with processes.Background(lambda: "here", 2, idle=True) as job:
+        assert not job.ready() and job.result() == "here"
+
+
 def _pid_of(x):
     return x * x, os.getpid()
 

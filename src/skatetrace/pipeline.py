@@ -23,6 +23,7 @@ figure as given, ``rests="joins"`` rests at every smooth join.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 from typing import Any, Iterable
 
@@ -32,9 +33,10 @@ from .dynamics.controls import ControlSchedule
 from .dynamics.model import SleighParams
 from .figures.figure import Figure, Section
 from .planning.planner import figure_unknowns, plan_figure
+from .processes import Background
 from .tracing.sections import FigureTrace, TraceOptions, TraceStatus, trace_figure
 from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
-from .verification.verify import VerificationReport, check_rel_tol, schedule_from_trace, verify
+from .verification.verify import VerificationReport, check_rel_tol, reporting, schedule_from_trace, verify
 
 __all__ = ["DEFAULT_PLAN_PIECES", "DEFAULT_PLAN_UNKNOWNS", "REST_POLICIES", "DefaultReachTrace", "ReachPoint",
            "ReachSweep", "VerifiedTrace", "add_rests", "middle_join", "sweep_reach", "too_large_to_plan",
@@ -328,6 +330,13 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
       moves the mass behind the blade for long, the open loop amplifies them beyond the tolerance
       (measured: a 6 m line, 1e-10 grown to 1e-6 rad of heading).
 
+    The launch-glide-stop trace of a figure that is planned is made beforehand, beside the plan, in a
+    child at the lowest priority (:class:`~skatetrace.processes.Background` with ``idle=True``): it
+    runs on what the planner leaves idle (a curve's linked program, one program on one core, leaves
+    the other core free for seconds) and costs a plan that is kept next to nothing. Where the plan
+    is given up and the child is done, its trace is taken; where it is not done, it is ended and
+    the trace made here. The answer is the same either way.
+
     Parameters
     ----------
     options : TraceOptions
@@ -354,17 +363,33 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
                                  reason=beyond)
     if options.plan_budget is None:
         options = replace(options, plan_budget=max_work)
-    done = run(options)
-    if done.success:
-        return DefaultReachTrace(result=done, options=options, unknowns=size)
-    spent = next((s.message for s in done.trace.sections if s.status is TraceStatus.OVER_BUDGET), None)
-    if spent is not None:
-        return DefaultReachTrace(result=run(unbounded), options=unbounded, unknowns=size, fell_back="over budget",
-                                 reason=spent)
-    bad = [s for s in done.trace.sections if not s.success]
-    # a reason, not "skipped" (all or nothing)
-    failed = next((s for s in bad if s.status is not TraceStatus.NOT_PLANNED), bad[0]).message if bad else None
-    again = run(unbounded)
+
+    def quietly() -> VerifiedTrace:
+        # made in a child on what the planner leaves idle: it tells nobody of its progress
+        with reporting(lambda *_: None), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return trace_and_verify(figure, params, unbounded, rests=rests, rel_tol=rel_tol, limits=limits)
+
+    with Background(quietly, options.workers, idle=True) as early:
+
+        def fallback() -> VerifiedTrace:
+            """The launch-glide-stop trace: the child's where it is done, else made here (the same answer)."""
+            if early.ready():
+                return early.result()
+            early.cancel()
+            return run(unbounded)
+
+        done = run(options)
+        if done.success:
+            return DefaultReachTrace(result=done, options=options, unknowns=size)
+        spent = next((s.message for s in done.trace.sections if s.status is TraceStatus.OVER_BUDGET), None)
+        if spent is not None:
+            return DefaultReachTrace(result=fallback(), options=unbounded, unknowns=size, fell_back="over budget",
+                                     reason=spent)
+        bad = [s for s in done.trace.sections if not s.success]
+        # a reason, not "skipped" (all or nothing)
+        failed = next((s for s in bad if s.status is not TraceStatus.NOT_PLANNED), bad[0]).message if bad else None
+        again = fallback()
     if failed is None:  # every section planned, the replay failed
         if again.success:
             return DefaultReachTrace(result=again, options=unbounded, unknowns=size, fell_back="unverified",

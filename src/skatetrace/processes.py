@@ -28,7 +28,7 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Generic, Iterable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "Background", "available_workers", "can_fork", "evaluated_ahead", "map_forked",
+__all__ = ["DEFAULT_MAX_WORKERS", "IDLE_NICENESS", "Background", "available_workers", "can_fork", "evaluated_ahead", "map_forked",
            "quiet_on_interrupt", "recording_interrupts", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
@@ -152,9 +152,20 @@ def run_jobs(fn: Callable[[J], R], jobs: Sequence[J], workers: int | None = None
         yield fn(job)
 
 
-def _forked_part(fn: Callable, items: list, conn) -> None:
-    """In a forked child: ``fn`` on its share of the items, the results sent back (None on any failure)."""
+#: The niceness of a child that works only on what the machine leaves idle (:class:`Background`):
+#: the lowest priority, a share of about 1.5 % of a core that other work wants.
+IDLE_NICENESS = 19
+
+
+def _forked_part(fn: Callable, items: list, conn, niceness: int = 0) -> None:
+    """In a forked child: ``fn`` on its share of the items, the results sent back (None on any failure).
+
+    ``niceness`` is added to the child's (:func:`os.nice`) before it starts, where the platform can.
+    """
     quiet_on_interrupt()
+    if niceness:
+        with contextlib.suppress(AttributeError, OSError):  # no os.nice (Windows), or not allowed
+            os.nice(niceness)
     try:
         results = [fn(item) for item in items]
     except BaseException:  # the parent runs this share again, and reports the error there
@@ -195,12 +206,16 @@ def map_forked(fn: Callable[[J], R], items: Sequence[J], workers: int | None = N
 class _Child:
     """A forked child computing ``[fn(item) for item in items]`` (:func:`_forked_part`), its answer piped back."""
 
-    def __init__(self, fn: Callable, items: list):
+    def __init__(self, fn: Callable, items: list, niceness: int = 0):
         context = multiprocessing.get_context("fork")
         self._receive, send = context.Pipe(duplex=False)
-        self._process = context.Process(target=_forked_part, args=(fn, items, send), daemon=True)
+        self._process = context.Process(target=_forked_part, args=(fn, items, send, niceness), daemon=True)
         self._process.start()
         send.close()
+
+    def ready(self) -> bool:
+        """Whether the child has answered, or ended without an answer (:meth:`answer` will not wait)."""
+        return self._receive.poll()
 
     def answer(self) -> list | None:
         """The child's results, waited for; None where it failed or died before it could answer."""
@@ -234,11 +249,28 @@ class Background(Generic[R]):
 
     For work whose inputs are known early and whose answer is wanted late, beside work that
     leaves a core idle part of the time: the command line draws fit.png while the figure is traced.
+    With ``idle=True`` the child runs at the lowest priority (:data:`IDLE_NICENESS`), on what
+    the machine leaves idle, for work that may not be wanted at all: the default reach's
+    launch-glide-stop trace, kept only where the plan is given up, is made while the planner
+    leaves a core idle. Ask :meth:`ready` before :meth:`result`: such a child, behind other work,
+    may be far from done.
     """
 
-    def __init__(self, fn: Callable[[], R], workers: int | None = None):
+    def __init__(self, fn: Callable[[], R], workers: int | None = None, *, idle: bool = False):
         self._fn = fn
-        self._child = _Child(_called, [fn]) if worker_count(2, workers) > 1 and can_fork() else None
+        self._child = (_Child(_called, [fn], IDLE_NICENESS if idle else 0)
+                       if worker_count(2, workers) > 1 and can_fork() else None)
+
+    def ready(self) -> bool:
+        """Whether the child has answered (or ended without an answer), so that :meth:`result` will not
+        wait for it; False where there is no child (:meth:`result` would compute ``fn()`` here)."""
+        return self._child is not None and self._child.ready()
+
+    def cancel(self) -> None:
+        """End the child, if it is still at work; :meth:`result` then computes ``fn()`` here."""
+        child, self._child = self._child, None
+        if child is not None:
+            child.end()
 
     def result(self) -> R:
         """``fn()``: the child's answer, else computed here."""
@@ -256,9 +288,7 @@ class Background(Generic[R]):
         return self
 
     def __exit__(self, *exc) -> None:
-        child, self._child = self._child, None
-        if child is not None:
-            child.end()
+        self.cancel()
 
 
 def evaluated_ahead(fn: Callable[[J], R], items: Iterable[J], wanted: Callable[[J], bool], *,
