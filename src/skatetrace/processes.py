@@ -28,8 +28,8 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Generic, Iterable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "IDLE_NICENESS", "Background", "available_workers", "can_fork", "evaluated_ahead", "map_forked",
-           "quiet_on_interrupt", "recording_interrupts", "run_jobs", "worker_count"]
+__all__ = ["DEFAULT_MAX_WORKERS", "IDLE_NICENESS", "Background", "available_workers", "can_fork", "evaluated_ahead",
+           "map_forked", "quiet_on_interrupt", "recording_interrupts", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
 #: hundred MB, so a many-core machine is not filled with them by default.

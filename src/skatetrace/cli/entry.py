@@ -6,9 +6,9 @@ dispatchers) and CasADi's functions: measured on the double flower, 0.4 s betwee
 printed and the end of the process, about a third of the whole command from a cold start, and the
 same after any other command. The operating system frees the memory at once, so
 :func:`script` moves the objects still alive out of the collector's reach (:func:`gc.freeze`)
-before it returns. Nothing of the run's output depends on those collections: the files are
-written and closed by then, the worker processes joined, and the standard streams are still
-flushed, and the ``atexit`` handlers still run, as in any exit.
+before it returns. Nothing of the run's output depends on those collections: by then the files
+are written and closed and the worker processes joined, and the exit still flushes the standard
+streams and runs the ``atexit`` handlers.
 
 Only the process's entry does this: :func:`~skatetrace.cli.commands.main`, which tests and
 notebooks call, leaves the collector as it found it.
