@@ -354,8 +354,8 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     size, pieces = _plan_size(figure, params, options)
     beyond = _beyond(size, pieces, max_unknowns, max_pieces)
 
-    def run(opts: TraceOptions) -> VerifiedTrace:
-        return trace_and_verify(figure, params, opts, rests=rests, rel_tol=rel_tol, limits=limits, progress=progress)
+    def run(opts: TraceOptions, told=progress) -> VerifiedTrace:
+        return trace_and_verify(figure, params, opts, rests=rests, rel_tol=rel_tol, limits=limits, progress=told)
 
     unbounded = replace(options, reach=None, all_or_nothing=False)
     if beyond:
@@ -368,7 +368,7 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
         # made in a child on what the planner leaves idle: it tells nobody of its progress
         with reporting(lambda *_: None), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return trace_and_verify(figure, params, unbounded, rests=rests, rel_tol=rel_tol, limits=limits)
+            return run(unbounded, None)
 
     with Background(quietly, options.workers, idle=True) as early:
 
