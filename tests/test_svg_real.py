@@ -326,3 +326,19 @@ def test_a_near_cusp_of_a_quarter_of_the_tolerance_is_a_rest_and_the_figure_trac
     assert [len(c.sections()) for c in fig.curves] == [3, 4]
     done = trace_and_verify(fig, fig.params, st.TraceOptions(speed=2.0), rests="never")
     assert done.success, done.message
+
+
+def test_a_logo_whose_petals_end_in_tips_of_143_degrees_traces_without_rests(tmp_path):
+    # simple-icons' CorelDRAW logo (see test_splitting) at 6 m / 1 mm: its outer petals' tips were
+    # fitted by arcs of a millimetre and failed, then nine rounds of rests cut its curves into
+    # sections of millimetres, two of which nothing traced (62 s, verification failed). With the
+    # tips reversals, every section traces at once and the replay verifies.
+    import skatetrace as st
+    from skatetrace.pipeline import trace_and_verify
+    from test_splitting import CORELDRAW
+
+    (tmp_path / "coreldraw.svg").write_text(svg(f'<path d="{CORELDRAW}"/>', viewBox="0 0 24 24"))
+    fig = st.resolve(tmp_path / "coreldraw.svg", size="6m", tol="1mm", height=1.7).figure
+    done = trace_and_verify(fig, fig.params, st.TraceOptions(speed=2.0), rests="never")
+    assert done.success, done.message
+    assert done.report.max_deviation <= 1e-6 * 6.0
