@@ -543,3 +543,27 @@ def test_bench_fit_quick(capsys):
     assert r["min_segments"] <= r["greedy_segments"]
     assert r["greedy_bound"] <= r["tol"] and r["min_bound"] <= r["tol"]
     assert "min/greedy" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("size", [1e-3, 4e-3, 8e-3, 16e-3])
+def test_a_run_between_two_corners_within_the_tolerance_of_its_chord_is_that_line(size):
+    # An S-bend between two corners (a section of its own, rest to rest) bulging 0.087 x its size
+    # from its chord: at 1 mm tolerance, a line up to the 8 mm one (0.69 mm off), the fit's own arcs
+    # beyond (16 mm: 1.39 mm off). The 4 mm one was 7 arcs of 0.1 to 2 mm radius, turning back and forth.
+    from skatetrace.drawings.curves import BezierPiece, LinePiece, Path
+
+    h = size
+    bend = BezierPiece(((0.0, 0.0), (0.3 * h, 0.2 * h), (-0.3 * h, 0.4 * h), (0.0, 0.6 * h)))
+    path = Path((LinePiece((-0.1, 0.0), (0.0, 0.0)), bend, LinePiece((0.0, 0.6 * h), (-0.1, 0.6 * h))))
+    fit = fit_path(path, 1e-3)
+    assert fit.success and fit.hausdorff <= 1e-3
+    check_structure(path, fit)
+    middle = fit.runs[1]
+    chord = size <= 8e-3
+    assert ([(s.curvature, s.length) for s in middle.segments] == [(0.0, pytest.approx(0.6 * h, rel=1e-12))]) is chord
+    if chord:
+        assert middle.start.heading == pytest.approx(math.pi / 2, abs=1e-12)
+        assert [r.corner for r in fit.runs[1:]] == pytest.approx([math.pi / 2, math.pi / 2], abs=1e-12)
+        assert middle.hausdorff == pytest.approx(0.0866 * h, rel=0.05)
+    else:
+        assert len(middle.segments) > 1
