@@ -147,17 +147,30 @@ def _spiral_offsets(spiral: Spiral, heading: float, a: np.ndarray, b: np.ndarray
     return np.stack([half * (np.cos(th) @ w), half * (np.sin(th) @ w)])
 
 
-def _travel_spiral(pose: Pose, spiral: Spiral, s: np.ndarray):
+def _spiral_path(pose: Pose, spiral: Spiral):
+    """``s -> (x, y, heading)`` along ``spiral`` laid out from ``pose``, for arrays ``s``.
+
+    The positions of the cell boundaries (:func:`_spiral_grid`) are integrated once, here, and
+    each query from the nearest of them (at most half a cell away): a search that travels along
+    the same spiral again and again (Newton's method on a foot point) pays for them once.
+    """
     grid = _spiral_grid(spiral)
     x0, y0, th0 = pose
     cells = _spiral_offsets(spiral, th0, grid[:-1], grid[1:])
     node_x = x0 + np.concatenate([[0.0], np.cumsum(cells[0])])
     node_y = y0 + np.concatenate([[0.0], np.cumsum(cells[1])])
-    # Each query is integrated from the nearest grid node (at most half a cell away).
-    j = np.clip(np.rint(s / grid[-1] * (grid.size - 1)).astype(int) if grid[-1] > 0 else np.zeros(s.shape, int),
-                0, grid.size - 1)
-    off = _spiral_offsets(spiral, th0, grid[j], s)
-    return node_x[j] + off[0], node_y[j] + off[1], th0 + spiral.heading_change(s)
+
+    def at(s: np.ndarray):
+        j = np.clip(np.rint(s / grid[-1] * (grid.size - 1)).astype(int) if grid[-1] > 0 else np.zeros(s.shape, int),
+                    0, grid.size - 1)
+        off = _spiral_offsets(spiral, th0, grid[j], s)
+        return node_x[j] + off[0], node_y[j] + off[1], th0 + spiral.heading_change(s)
+
+    return at
+
+
+def _travel_spiral(pose: Pose, spiral: Spiral, s: np.ndarray):
+    return _spiral_path(pose, spiral)(s)
 
 
 def travel(pose: Pose, piece, s):
@@ -236,18 +249,19 @@ def _distance_to_spiral(points: np.ndarray, pose: Pose, spiral: Spiral) -> np.nd
     kmax = spiral.max_abs_curvature()
     n = int(min(max(65, math.ceil(4.0 * kmax * L) * 8 + 1), 20001))
     sig = np.linspace(0.0, L, n)
-    x, y, _ = travel(pose, spiral, sig)
+    path = _spiral_path(pose, spiral)  # its cells integrated once for the ten calls below
+    x, y, _ = path(sig)
     _, idx = cKDTree(np.column_stack([x, y])).query(points.T)
     t = sig[idx]
     for _ in range(8):
-        fx, fy, th = travel(pose, spiral, t)
+        fx, fy, th = path(t)
         dx, dy = fx - points[0], fy - points[1]
         c, s_ = np.cos(th), np.sin(th)
         g = dx * c + dy * s_  # derivative of half the squared distance
         dg = 1.0 + spiral.curvature_at(t) * (-dx * s_ + dy * c)
         step = np.where(dg > 0.1, g / np.where(dg > 0.1, dg, 1.0), g)
         t = np.clip(t - np.clip(step, -L / (n - 1), L / (n - 1)), 0.0, L)
-    fx, fy, _ = travel(pose, spiral, t)
+    fx, fy, _ = path(t)
     d = np.hypot(fx - points[0], fy - points[1])
     return np.minimum(d, np.hypot(x[idx] - points[0], y[idx] - points[1]))
 
