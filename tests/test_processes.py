@@ -124,6 +124,30 @@ def test_evaluated_ahead_asks_wanted_when_it_makes_a_batch(forking):
     assert all(r is None for i, r in seen if i >= 9)
 
 
+def test_evaluated_ahead_sizes_its_rounds_by_the_time_an_item_takes(forking, monkeypatch):
+    # items of 40 ms or more in rounds meant to take 0.1 s: two items a process at most, not the
+    # eight a batch allows (a round is made with what the search knew when it was made, so a long
+    # one evaluates items the search would have turned away by then)
+    import time
+
+    made, real = [], processes.map_forked
+
+    def forked(fn, items, workers=None):
+        made.append(len(items))
+        return real(fn, items, workers)
+
+    monkeypatch.setattr(processes, "map_forked", forked)
+
+    def slow(x):
+        time.sleep(0.04)
+        return x
+
+    out = list(processes.evaluated_ahead(slow, range(13), lambda x: True, alone_for=0.0, batch=8, round_for=0.1,
+                                         workers=2))
+    assert [r for _, r in out] == list(range(13))
+    assert made and all(1 <= n <= 4 for n in made) and sum(made) == 12  # item 0 alone, then rounds of 2 to 4
+
+
 def test_evaluated_ahead_alone_or_in_a_child_runs_everything_here(forking):
     parent = os.getpid()
     out = list(processes.evaluated_ahead(lambda x: os.getpid(), range(6), lambda x: True, alone_for=60.0))

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import math
 import multiprocessing
 import os
 import signal
@@ -292,34 +293,48 @@ class Background(Generic[R]):
 
 
 def evaluated_ahead(fn: Callable[[J], R], items: Iterable[J], wanted: Callable[[J], bool], *,
-                    alone_for: float = 0.2, batch: int = 8, workers: int | None = None) -> Iterator[tuple[J, R | None]]:
+                    alone_for: float = 0.2, batch: int = 8, round_for: float = 0.25,
+                    workers: int | None = None) -> Iterator[tuple[J, R | None]]:
     """``(item, fn(item))`` for each item in order, lazily: a search that stops at its answer, sped up when it runs long.
 
     ``fn`` is called only on the items ``wanted`` accepts (the others are yielded with None).
     Items are evaluated here, one at a time as the caller asks for them, for ``alone_for``
-    seconds; after that, in batches of ``batch`` per process (:func:`worker_count`), shared out by
-    :func:`map_forked` among this process and forked children. A batch may evaluate items the
-    caller never asks for (it stopped in the middle): that costs time, never a different answer,
-    since every item is evaluated by ``fn`` alike either way. ``wanted`` is asked when a batch is
-    made, so it must only ever turn more items away as the search goes on. Only the main process
-    forks: in a worker of a pool (which has a sibling per core) everything runs here.
+    seconds; after that, in rounds of up to ``batch`` per process (:func:`worker_count`), shared
+    out by :func:`map_forked` among this process and forked children. A round is sized to take
+    about ``round_for`` seconds at the time an item has taken so far (at least one item a
+    process): ``wanted`` is asked when a round is made, so the longer the round, the more items
+    it evaluates that the search, had it gone on one at a time, would have turned away (a search
+    for the best of a few placements of 0.2 s each, batches of 8 a process gained nothing on two
+    cores); the shorter, the more often it forks. A round may evaluate items the caller never
+    asks for (it stopped in the middle): that costs time, never a different answer, since every
+    item is evaluated by ``fn`` alike either way. ``wanted`` must only ever turn more items away
+    as the search goes on. Only the main process forks: in a worker of a pool (which has a
+    sibling per core) everything runs here.
     """
     items = iter(items)
     started = time.perf_counter()
+    evaluated = 0
     for item in items:
-        yield item, (fn(item) if wanted(item) else None)
+        want = wanted(item)
+        yield item, (fn(item) if want else None)
+        evaluated += want
         if time.perf_counter() - started > alone_for:
             break
     else:
         return
     count = worker_count(DEFAULT_MAX_WORKERS, workers)
     forks = count > 1 and multiprocessing.parent_process() is None
+    per_item = (time.perf_counter() - started) / max(evaluated, 1)  # seconds an item, as measured so far
     while True:
-        chunk = list(itertools.islice(items, batch * count if forks else 1))
+        size = max(1, min(batch, int(round_for / per_item) if per_item > 0 else batch))
+        chunk = list(itertools.islice(items, size * count if forks else 1))
         if not chunk:
             return
         keep = [wanted(item) for item in chunk]
         todo = [item for item, k in zip(chunk, keep) if k]
+        began = time.perf_counter()
         results = iter(map_forked(fn, todo, count) if forks else [fn(item) for item in todo])
+        if todo:  # the items shared out between the processes ran side by side
+            per_item = (time.perf_counter() - began) / math.ceil(len(todo) / count if forks else len(todo))
         for item, k in zip(chunk, keep):
             yield item, (next(results) if k else None)
