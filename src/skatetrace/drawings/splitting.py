@@ -79,10 +79,9 @@ def _turn_across(piece: Piece, t: float, reach: float) -> float:
     On each side the parameter where the distance from ``r(t)`` first reaches ``reach`` (bisected
     on a grid), or the piece's end if it stays inside. The turn is the total change of the
     tangent's direction along the way (the integral of the curvature), not the angle between the
-    two end tangents: a tip that loops past a reversal (217 degrees across the tip of a petal of
-    simple-icons' coreldraw) turns by more than pi, where the angle between its ends folds back to
-    143 degrees. Directions are followed on grids that close in geometrically on ``t``, where they
-    turn fastest, so that no step between samples turns by pi or more.
+    two end tangents, which folds back above pi: a tip that loops past a reversal, 220 degrees,
+    would read as 140. Directions are followed on grids that close in geometrically on ``t``, where
+    they turn fastest, so that no step between samples turns by pi or more.
     """
     p = _col(piece, "point", t)
     ends = []
