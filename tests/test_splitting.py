@@ -188,4 +188,4 @@ def test_a_tip_that_turns_by_143_degrees_within_a_fifth_of_a_millimetre_is_a_cus
         fit = fit_path(path, 1e-3)
         assert fit.success and fit.hausdorff <= 1e-3
         assert sum(abs(r.corner or 0.0) > 3.0 for r in fit.runs) == 1  # the tip is a reversal
-        assert all(abs(s.curvature) < 100.0 for r in fit.runs for s in r.segments)  # no arc of a millimetre
+        assert all(abs(s.curvature) < 300.0 for r in fit.runs for s in r.segments)  # none of 1 mm radius (now 80)
