@@ -2,6 +2,7 @@
 
 import dataclasses
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -772,6 +773,34 @@ def test_the_launch_glide_stop_trace_made_beside_the_plan_is_the_one_kept(monkey
     for name in ("t", "a", "b", "adot", "bdot"):
         np.testing.assert_array_equal(getattr(kept.result.schedule, name), getattr(direct.schedule, name))
     assert kept.result.report.max_deviation == direct.report.max_deviation
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="a child's processor time is read from /proc")
+def test_a_launch_glide_stop_trace_not_done_when_the_plan_is_given_up_is_waited_for(monkeypatch):
+    # the child is not done when the plan is given up: it is waited for while it runs (here asked
+    # for no share of a core, so that a busy test machine cannot starve it), not made afresh here
+    import skatetrace.pipeline as pipeline
+    from skatetrace import processes
+
+    class NotYet(processes.Background):
+        def ready(self):
+            return False
+
+        def awaited(self, share=0.5, window=0.25):
+            return super().awaited(share=0.0, window=window)
+
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
+    monkeypatch.setattr(pipeline, "Background", NotYet)
+    made_here = []
+    real = pipeline.trace_and_verify
+    monkeypatch.setattr(pipeline, "trace_and_verify", lambda *a, **k: made_here.append(a[2].reach) or real(*a, **k))
+    fig = figure_from_dict(CUSPS["pivot"])
+    options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True, workers=2)
+    kept = st.trace_within_default_reach(fig, None, options, rests="never", max_work=0)
+    assert kept.fell_back == "over budget" and kept.result.success
+    assert made_here == [1.0]  # the plan here; the launch-glide-stop trace came from the child
+    direct = real(fig, None, kept.options, rests="never")
+    np.testing.assert_array_equal(kept.result.schedule.a, direct.schedule.a)
 
 
 def test_the_largest_school_figure_is_planned_well_within_the_default_budget():

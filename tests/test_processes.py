@@ -244,6 +244,43 @@ def test_a_background_child_not_yet_done_is_not_ready_and_can_be_cancelled(forki
         assert not job.ready() and job.result() == "here"
 
 
+def _busy_then_pid(seconds):
+    import time
+
+    end = time.process_time() + seconds
+    while time.process_time() < end:
+        pass
+    return os.getpid()
+
+
+def test_an_idle_child_is_waited_for_while_it_runs_and_ended_where_it_is_starved(forking, monkeypatch):
+    import time
+
+    parent = os.getpid()
+    # at work (this process waits): waited for, its answer taken. Not idle, and asked for a
+    # twentieth of a core, so that other work on a busy test machine cannot starve it
+    with processes.Background(lambda: _busy_then_pid(0.6), 2) as job:
+        assert not job.ready()
+        waited = job.awaited(share=0.05)
+        assert waited is not None and waited[0] != parent and not job.ready()
+    # a child that gets no processor time (here: asleep, as one starved by other work would be)
+    # is ended after a window, not waited for
+    with processes.Background(lambda: time.sleep(60), 2, idle=True) as job:
+        child = job._child._process
+        started = time.monotonic()
+        assert job.awaited(window=0.2) is None
+        assert time.monotonic() - started < 5 and not child.is_alive() and not job.ready()
+    # where its processor time cannot be read (not Linux), nor is it waited for
+    monkeypatch.setattr(processes._Child, "cpu_seconds", lambda self: None)
+    with processes.Background(lambda: _busy_then_pid(60), 2, idle=True) as job:
+        child = job._child._process
+        assert job.awaited() is None and not child.is_alive()
+    # without a child there is nothing to wait for
+    monkeypatch.setattr(processes, "can_fork", lambda: False)
+    with processes.Background(lambda: "here", 2, idle=True) as job:
+        assert job.awaited() is None and job.result() == "here"
+
+
 def _pid_of(x):
     return x * x, os.getpid()
 

@@ -334,7 +334,10 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     child at the lowest priority (:class:`~skatetrace.processes.Background` with ``idle=True``): it
     runs on what the planner leaves idle (a curve's linked program, one program on one core, leaves
     the other core free for seconds) and costs a plan that is kept next to nothing. Where the plan
-    is given up and the child is done, its trace is taken; where it is not done, it is ended and
+    is given up and the child is done, its trace is taken. Where it is not done, it is waited for
+    while it runs on at least half a core (:meth:`~skatetrace.processes.Background.awaited`): with
+    the planning over it has a core to itself and a head start (phosphor's device-rotate-light: 3.0 s
+    waited against 4.4 s made afresh); where other work on the machine starves it, it is ended and
     the trace made here. The answer is the same either way.
 
     Parameters
@@ -373,11 +376,12 @@ def trace_within_default_reach(figure: Figure, params: SleighParams | None, opti
     with Background(quietly, options.workers, idle=True) as early:
 
         def fallback() -> VerifiedTrace:
-            """The launch-glide-stop trace: the child's where it is done, else made here (the same answer)."""
+            """The launch-glide-stop trace: the child's, waited for while it runs at speed, else made here
+            (the same answer)."""
             if early.ready():
                 return early.result()
-            early.cancel()
-            return run(unbounded)
+            waited = early.awaited()
+            return waited[0] if waited is not None else run(unbounded)
 
         done = run(options)
         if done.success:

@@ -234,6 +234,19 @@ class _Child:
             self._process.terminate()
             self._process.join()
 
+    def wait(self, seconds: float) -> bool:
+        """Whether the child answers (or ends) within ``seconds``."""
+        return self._receive.poll(seconds)
+
+    def cpu_seconds(self) -> float | None:
+        """The processor time the child has used so far (Linux's ``/proc``), or None where it cannot be read."""
+        try:
+            with open(f"/proc/{self._process.pid}/stat", "rb") as f:
+                fields = f.read().rsplit(b")", 1)[1].split()
+            return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+        except (OSError, ValueError, IndexError):
+            return None
+
 
 def _called(fn: Callable[[], R]) -> R:
     return fn()
@@ -272,6 +285,35 @@ class Background(Generic[R]):
         child, self._child = self._child, None
         if child is not None:
             child.end()
+
+    def awaited(self, share: float = 0.5, window: float = 0.25) -> tuple[R] | None:
+        """``(fn(),)`` from the child, waited for as long as it runs on at least ``share`` of a core; else None.
+
+        For an ``idle`` child whose answer is now wanted: with this process waiting, it has a core
+        to itself unless other work on the machine takes it, and it has a head start over ``fn()``
+        made afresh here. Every ``window`` seconds its processor time is read: a child that used
+        less than ``share`` of the window (the machine busy with other work, which its lowest
+        priority yields to) is ended, and None returned, as where there is no child, it failed, or
+        its processor time cannot be read (not Linux): the caller then computes ``fn()`` itself.
+        """
+        child = self._child
+        if child is None:
+            return None
+        used = child.cpu_seconds()
+        while used is not None:
+            if child.wait(window):
+                self._child = None
+                try:
+                    part = child.answer()
+                finally:
+                    child.end()
+                return None if part is None else (part[0],)
+            now = child.cpu_seconds()
+            if now is None or now - used < share * window:
+                break
+            used = now
+        self.cancel()
+        return None
 
     def result(self) -> R:
         """``fn()``: the child's answer, else computed here."""
