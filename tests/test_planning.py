@@ -749,18 +749,14 @@ def test_the_default_reach_keeps_the_launch_glide_stop_trace_where_the_plan_spen
         assert kept.result.success and kept.fell_back == "" and kept.options.reach == 1.0
 
 
-def test_the_launch_glide_stop_trace_made_beside_the_plan_is_the_one_kept(monkeypatch):
-    # it is made in a child on what the planner leaves idle; here the child is waited for, as when
-    # the planning took long enough, and its answer is the one made here without it
+def _given_up_beside(monkeypatch, background):
+    """A plan given up at once (no budget) with ``background`` as the pipeline's Background: the
+    result, and the reach of every ``trace_and_verify`` made in this process (None: launch-glide-stop)."""
     import skatetrace.pipeline as pipeline
     from skatetrace import processes
 
-    class Waited(processes.Background):
-        def ready(self):
-            return self._child is not None and self._child._receive.poll(300)
-
     monkeypatch.setattr(processes, "can_fork", lambda: True)
-    monkeypatch.setattr(pipeline, "Background", Waited)
+    monkeypatch.setattr(pipeline, "Background", background)
     made_here = []
     real = pipeline.trace_and_verify
     monkeypatch.setattr(pipeline, "trace_and_verify", lambda *a, **k: made_here.append(a[2].reach) or real(*a, **k))
@@ -768,8 +764,21 @@ def test_the_launch_glide_stop_trace_made_beside_the_plan_is_the_one_kept(monkey
     options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True, workers=2)
     kept = st.trace_within_default_reach(fig, None, options, rests="never", max_work=0)
     assert kept.fell_back == "over budget" and kept.result.success and kept.options.reach is None
-    assert made_here == [1.0]  # the plan; the launch-glide-stop trace came from the child
     direct = real(fig, None, kept.options, rests="never")
+    return kept, made_here, direct
+
+
+def test_the_launch_glide_stop_trace_made_beside_the_plan_is_the_one_kept(monkeypatch):
+    # it is made in a child on what the planner leaves idle; here the child is waited for, as when
+    # the planning took long enough, and its answer is the one made here without it
+    from skatetrace import processes
+
+    class Waited(processes.Background):
+        def ready(self):
+            return self._child is not None and self._child._receive.poll(300)
+
+    kept, made_here, direct = _given_up_beside(monkeypatch, Waited)
+    assert made_here == [1.0]  # the plan; the launch-glide-stop trace came from the child
     for name in ("t", "a", "b", "adot", "bdot"):
         np.testing.assert_array_equal(getattr(kept.result.schedule, name), getattr(direct.schedule, name))
     assert kept.result.report.max_deviation == direct.report.max_deviation
@@ -779,7 +788,6 @@ def test_the_launch_glide_stop_trace_made_beside_the_plan_is_the_one_kept(monkey
 def test_a_launch_glide_stop_trace_not_done_when_the_plan_is_given_up_is_waited_for(monkeypatch):
     # the child is not done when the plan is given up: it is waited for while it runs (here asked
     # for no share of a core, so that a busy test machine cannot starve it), not made afresh here
-    import skatetrace.pipeline as pipeline
     from skatetrace import processes
 
     class NotYet(processes.Background):
@@ -789,17 +797,8 @@ def test_a_launch_glide_stop_trace_not_done_when_the_plan_is_given_up_is_waited_
         def awaited(self, share=0.5, window=0.25):
             return super().awaited(share=0.0, window=window)
 
-    monkeypatch.setattr(processes, "can_fork", lambda: True)
-    monkeypatch.setattr(pipeline, "Background", NotYet)
-    made_here = []
-    real = pipeline.trace_and_verify
-    monkeypatch.setattr(pipeline, "trace_and_verify", lambda *a, **k: made_here.append(a[2].reach) or real(*a, **k))
-    fig = figure_from_dict(CUSPS["pivot"])
-    options = st.TraceOptions(reach=1.0, reach_hint=False, all_or_nothing=True, workers=2)
-    kept = st.trace_within_default_reach(fig, None, options, rests="never", max_work=0)
-    assert kept.fell_back == "over budget" and kept.result.success
+    kept, made_here, direct = _given_up_beside(monkeypatch, NotYet)
     assert made_here == [1.0]  # the plan here; the launch-glide-stop trace came from the child
-    direct = real(fig, None, kept.options, rests="never")
     np.testing.assert_array_equal(kept.result.schedule.a, direct.schedule.a)
 
 
