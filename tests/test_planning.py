@@ -775,7 +775,7 @@ def test_the_launch_glide_stop_trace_made_beside_the_plan_is_the_one_kept(monkey
 
     class Waited(processes.Background):
         def ready(self):
-            return self._child is not None and self._child._receive.poll(300)
+            return self._child is not None and self._child.wait(300)
 
     kept, made_here, direct = _given_up_beside(monkeypatch, Waited)
     assert made_here == [1.0]  # the plan; the launch-glide-stop trace came from the child

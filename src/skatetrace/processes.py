@@ -214,10 +214,6 @@ class _Child:
         self._process.start()
         send.close()
 
-    def ready(self) -> bool:
-        """Whether the child has answered, or ended without an answer (:meth:`answer` will not wait)."""
-        return self._receive.poll()
-
     def answer(self) -> list | None:
         """The child's results, waited for; None where it failed or died before it could answer."""
         try:
@@ -234,8 +230,9 @@ class _Child:
             self._process.terminate()
             self._process.join()
 
-    def wait(self, seconds: float) -> bool:
-        """Whether the child answers (or ends) within ``seconds``."""
+    def wait(self, seconds: float = 0.0) -> bool:
+        """Whether the child answers, or ends without an answer, within ``seconds`` (at once by default):
+        then :meth:`answer` will not wait."""
         return self._receive.poll(seconds)
 
     def cpu_seconds(self) -> float | None:
@@ -278,7 +275,7 @@ class Background(Generic[R]):
     def ready(self) -> bool:
         """Whether the child has answered (or ended without an answer), so that :meth:`result` will not
         wait for it; False where there is no child (:meth:`result` would compute ``fn()`` here)."""
-        return self._child is not None and self._child.ready()
+        return self._child is not None and self._child.wait()
 
     def cancel(self) -> None:
         """End the child, if it is still at work; :meth:`result` then computes ``fn()`` here."""
@@ -302,11 +299,7 @@ class Background(Generic[R]):
         used = child.cpu_seconds()
         while used is not None:
             if child.wait(window):
-                self._child = None
-                try:
-                    part = child.answer()
-                finally:
-                    child.end()
+                part = self._taken()
                 return None if part is None else (part[0],)
             now = child.cpu_seconds()
             if now is None or now - used < share * window:
@@ -317,15 +310,18 @@ class Background(Generic[R]):
 
     def result(self) -> R:
         """``fn()``: the child's answer, else computed here."""
+        part = self._taken()
+        return part[0] if part is not None else self._fn()
+
+    def _taken(self) -> list | None:
+        """The child's answer, waited for, the child ended and let go; None where there is none."""
         child, self._child = self._child, None
-        if child is not None:
-            try:
-                part = child.answer()
-            finally:
-                child.end()
-            if part is not None:
-                return part[0]
-        return self._fn()
+        if child is None:
+            return None
+        try:
+            return child.answer()
+        finally:
+            child.end()
 
     def __enter__(self) -> "Background[R]":
         return self

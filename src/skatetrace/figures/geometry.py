@@ -169,10 +169,6 @@ def _spiral_path(pose: Pose, spiral: Spiral):
     return at
 
 
-def _travel_spiral(pose: Pose, spiral: Spiral, s: np.ndarray):
-    return _spiral_path(pose, spiral)(s)
-
-
 def travel(pose: Pose, piece, s):
     """Pose reached after travelling ``s`` (scalar or array) along ``piece`` (a Segment or a Spiral).
 
@@ -180,7 +176,7 @@ def travel(pose: Pose, piece, s):
     """
     if isinstance(piece, Spiral):
         s = np.asarray(s, dtype=float)
-        x, y, th = _travel_spiral(pose, piece, s.ravel())
+        x, y, th = _spiral_path(pose, piece)(s.ravel())
         return x.reshape(s.shape), y.reshape(s.shape), th.reshape(s.shape)
     return advance(pose, piece.curvature, s)
 
