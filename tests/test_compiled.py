@@ -34,7 +34,7 @@ def test_a_fresh_cache_is_cold_then_warm_in_the_next_process(tmp_path):
     code = ("import sys, skatetrace.cli.compiled as c; parts = []; print(c.cache_is_warm()); "
             "c.warm_up(lambda p, i, n: parts.append((p, i, n))); print(len(parts), parts[0][1:] if parts else None)")
     first = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    assert first.stdout.split("\n")[:2] == ["False", "5 (1, 5)"]
+    assert first.stdout.split("\n")[:2] == ["False", "6 (1, 6)"]
     again = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert again.stdout.split("\n")[:2] == ["True", "0 None"]
 
@@ -56,7 +56,7 @@ def test_a_first_run_compiles_only_what_it_needs_and_says_so(tmp_path):
     assert "  compiling the verification's parts alongside, in a second process\n" in first.stderr
     for part in ("the verifying replay", "the distance checks"):
         assert (f"  compiling {part}\n" in first.stderr) == (f"  compiled {part} in " in first.stderr)
-    assert "closed-loop" not in first.stderr and "finish" not in first.stderr
+    assert "closed-loop" not in first.stderr and "Riccati" not in first.stderr and "finish" not in first.stderr
     again = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
     assert "compil" not in again.stderr
 

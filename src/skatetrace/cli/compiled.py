@@ -1,7 +1,8 @@
 """The compiled numerical core: is numba's on-disk cache of it ready, and compiling it ahead of a run.
 
-The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`)
-and the closed-loop replay (:mod:`skatetrace.feedback.law_replay`), the distance checks of
+The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`),
+the closed-loop replay (:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
+(:mod:`skatetrace.feedback.riccati`), the distance checks of
 :mod:`skatetrace.verification.verify` and the planner's exact finish (:mod:`skatetrace.planning.shooting`)
 are compiled by numba with ``cache=True``: the first run on a machine compiles them (10-30 s,
 depending on the machine) and writes the machine code to numba's cache (the ``__pycache__`` folders
@@ -12,8 +13,8 @@ it is rebuilt after an upgrade or on another machine, never reused wrongly.
 
 :func:`cache_is_warm` says whether a run would load rather than compile; :func:`reporting` names
 each part as a run compiles it, so that the command line can say what is happening while it
-compiles only what that run needs (a launch-glide-stop trace never compiles the closed-loop replay
-or the planner's finish: 13 s instead of 28 s on a first double flower); :func:`warm_up` compiles
+compiles only what that run needs (a launch-glide-stop trace never compiles the closed-loop replay,
+the law's Riccati equation or the planner's finish: 13 s instead of 28 s on a first double flower); :func:`warm_up` compiles
 (or loads) every part by tracing and verifying a small figure, so that an installer (a container
 build, a ``postinstall`` step) can pay that once, ahead of any real work. :func:`compile_ahead`
 compiles the verification's parts in a forked process while the run traces (and compiles the
@@ -34,6 +35,7 @@ ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
     ("the manoeuvre integrator", (("skatetrace.dynamics.integrator", "_run"), ("skatetrace.dynamics.integrator", "_evaluate_steps"))),
     ("the verifying replay", (("skatetrace.dynamics.replayer", "_run"),)),
     ("the closed-loop replay", (("skatetrace.feedback.law_replay", "_run"),)),
+    ("the tracking law's Riccati equation", (("skatetrace.feedback.riccati", "_run"),)),
     ("the distance checks", (("skatetrace.verification.verify", "_golden_distances"), ("skatetrace.verification.verify", "_hermite_distance"))),
     ("the planner's exact finish", (("skatetrace.planning.shooting", "legs_from"),
                                     ("skatetrace.planning.shooting", "segment_ends"),
@@ -227,17 +229,19 @@ def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
 
 
 def _replay_under_a_law(trace) -> None:
-    """Compile the closed-loop replay, which verification reaches only on an ill-conditioned section:
-    a replay of ``trace``'s first section under a law of zero gains (its types are every law's)."""
+    """Compile the closed-loop replay and the law's Riccati equation, which verification reaches only on
+    an ill-conditioned section: a law designed for ``trace``'s first section, and a replay of the
+    section under a law of zero gains (their types are every law's)."""
     import numpy as np
 
     from ..feedback.closed_loop import replay_law
-    from ..feedback.lqr import TrackingLaw
+    from ..feedback.lqr import TrackingLaw, default_gains, design
     from ..feedback.reference import section_reference
 
     if not (trace.sections and trace.sections[0].success):
         return
     ref = section_reference(trace.sections[0], trace.params, points=8, max_points=8)
+    design(ref, trace.params, default_gains(trace.figure.size()))
     law = TrackingLaw(reference=ref, t=ref.grid, K=np.zeros((ref.grid.size, 2, 7)), params=trace.params)
     replay_law(ref, law, trace.params, ref.state_at(0.0)[0][:, 0], [0.0, ref.duration])
 

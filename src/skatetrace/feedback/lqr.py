@@ -239,10 +239,6 @@ def _reference_at(ref: Reference, tau, n: int):
 _BLOCK = 65_536
 
 
-class _Stop(Exception):
-    """The Riccati integration left the finite numbers or its budget."""
-
-
 def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nfev: int = 200_000) -> TrackingLaw:
     """Solve the section's Riccati equation backwards over the reference's rows.
 
@@ -250,7 +246,7 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nf
     limits of floating point, say a figure a micrometre across) or needs more than ``max_nfev``
     evaluations is returned as a law with ``success=False``.
     """
-    from scipy.integrate import solve_ivp
+    from .riccati import solve_backwards
 
     t = ref.grid
     z, u = ref.state_at(t)
@@ -270,46 +266,22 @@ def design(ref: Reference, params: SleighParams, gains: TrackingGains, *, max_nf
     As *= s[None, None, :]
     Bs *= (1 / s)[None, :, None]
 
-    count = [0]
-    eye, last = np.eye(7), t.size - 2
-
-    def riccati(tt, pv):
-        # called some ten thousand times a section: the coefficients interpolated inline
-        count[0] += 1
-        if count[0] > max_nfev or not np.isfinite(pv).all():
-            raise _Stop
-        P = pv.reshape(7, 7)
-        j = min(max(int(t.searchsorted(tt, side="right")) - 1, 0), last)
-        h = t[j + 1] - t[j]
-        w = (tt - t[j]) / h if h > 0 else 0.0
-        Aj, Bj = (1 - w) * As[j] + w * As[j + 1], (1 - w) * Bs[j] + w * Bs[j + 1]
-        PB = P @ Bj
-        dP = -(Aj.T @ P + P @ Aj - (PB * Rinv) @ PB.T + eye)
-        return dP.ravel()
-
-    T = float(t[-1])
     times = np.unique(t)  # a repeated row (a jump of the rates) has one P
     failed = TrackingLaw(reference=ref, t=t, K=np.zeros((t.size, 2, 7)), success=False,
                          message="the Riccati equation could not be solved over the section", params=params)
     if not (np.all(np.isfinite(As)) and np.all(np.isfinite(Bs)) and np.all(np.isfinite(Rinv))):
         return failed
-    try:
-        with np.errstate(all="ignore"):
-            # the solver's own interpolant at the rows, step by step (``t_eval``: one evaluation per
-            # step, where a dense-output object evaluated afterwards looks each row's step up again)
-            sol = solve_ivp(riccati, (T, float(t[0])), np.eye(7).ravel(), method="LSODA", rtol=1e-6, atol=1e-9,
-                            t_eval=times[::-1])
-    except _Stop:
-        return failed
-    if not sol.success or sol.y.shape[1] != times.size:
+    # compiled (skatetrace.feedback.riccati): DOP853's interpolant at the rows, step by step
+    P = solve_backwards(t, As, Bs, Rinv, times, rtol=1e-6, atol=1e-9, max_nfev=max_nfev)
+    if P is None:
         return failed
     # K (in the original coordinates) = R^-1 B^T P_original, with P_original = S^-1 P_scaled S^-1,
-    # by blocks of rows (the solution's columns run backwards in time; a repeated row reads its time's)
-    column = times.size - 1 - np.searchsorted(times, t)
+    # by blocks of rows (a repeated row reads its time's)
+    column = np.searchsorted(times, t)
     K = np.empty((t.size, 2, 7))
     for r0 in range(0, t.size, _BLOCK):
         rows = slice(r0, r0 + _BLOCK)
-        Ps = sol.y[:, column[rows]].T.reshape(-1, 7, 7)
+        Ps = P[:, column[rows]].T.reshape(-1, 7, 7)
         Ps = 0.5 * (Ps + np.transpose(Ps, (0, 2, 1)))
         K[rows] = np.matmul(np.transpose(Bs[rows], (0, 2, 1)), Ps)
     K *= Rinv[None, :, None]
