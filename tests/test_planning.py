@@ -77,10 +77,30 @@ def test_a_plan_is_sampled_coarsely_first_and_finely_where_its_replay_comes_clos
     kept = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
     assert kept.success and kept.report.passed_within(0.5), kept.message
     assert kept.schedule.t.size == coarse.t.size
-    # a replay that passes, but by less than half a limit: sampled finely, verified again
-    monkeypatch.setattr(VerificationReport, "passed_within", lambda self, share: False)
-    again = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
-    assert again.success and again.schedule.t.size == fine.t.size
+    # a replay that passes, but by less than half a limit: sampled thirty times more finely, and where
+    # that comes close too, a thousand times; each verified again
+    middle, _ = schedule_from_trace(trace, fine=30)
+    assert coarse.t.size < middle.t.size < fine.t.size
+    calls = []
+
+    def passed_within(self, share):
+        calls.append(share)
+        return len(calls) > misses
+
+    monkeypatch.setattr(VerificationReport, "passed_within", passed_within)
+    for misses, rows in ((1, middle.t.size), (2, fine.t.size)):
+        calls.clear()
+        again = st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
+        assert again.success and again.schedule.t.size == rows
+        assert calls == [0.5, 0.5]  # the coarse and the middle replays were asked, the fine one never
+
+
+@pytest.mark.parametrize("fine", [0.5, -1, math.inf, math.nan, "fine", None])
+def test_a_refinement_below_one_or_not_a_number_is_refused(arc, fine):
+    from skatetrace.verification.verify import schedule_from_trace
+
+    with pytest.raises(ValueError, match="fine must be True, False or a number >= 1"):
+        schedule_from_trace(arc[1], fine=fine)
 
 
 def test_passed_within_compares_every_measure_with_its_share_of_the_limit(arc):

@@ -82,12 +82,27 @@ def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractCon
 SCALE_FLOOR = 1e-2
 
 
-def _sample_section(sec, fine: bool = True) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+#: How many times more finely than the others a planned section is sampled by default
+#: (:func:`schedule_from_trace`): values to 1e-14 of their largest, rates to 1e-12.
+PLANNED_REFINEMENT = 1000.0
+
+
+def _refinement(fine: bool | float) -> float:
+    """The factor ``fine`` asks of a planned section's tolerances (:func:`schedule_from_trace`)."""
+    if isinstance(fine, (bool, np.bool_)):
+        return PLANNED_REFINEMENT if fine else 1.0
+    if not isinstance(fine, (int, float, np.integer, np.floating)) or not 1.0 <= fine < math.inf:
+        raise ValueError(f"fine must be True, False or a number >= 1 (how many times more finely a planned "
+                         f"section is sampled), got {fine!r}")
+    return float(fine)
+
+
+def _sample_section(sec, fine: bool | float = True) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Sample times of one traced section and its controls and momenta there (no layout).
 
     Both one-sided limits are sampled at every breakpoint: an interval's last row is the limit
     from the left, the next interval's first row the limit from the right. A planned section is
-    sampled more finely unless ``fine`` is False (:func:`schedule_from_trace`).
+    sampled more finely as ``fine`` asks (:func:`schedule_from_trace`).
     """
     def fn(tt, left):
         v = sec.evaluate(tt, geometry=False)
@@ -98,10 +113,11 @@ def _sample_section(sec, fine: bool = True) -> tuple[np.ndarray, dict[str, np.nd
         return np.vstack([v[k] for k in _SAMPLED])
 
     # A planned section moves the mass fast through its rests, where the replay's momenta must
-    # cancel the mass's rates: its rates are sampled a thousand times more finely. The others'
-    # pieces are held to tolerances relative to at least SCALE_FLOOR of the section's largest values.
+    # cancel the mass's rates: by default its rates are sampled a thousand times more finely. The
+    # others' pieces are held to tolerances relative to at least SCALE_FLOOR of the section's largest values.
     planned = sec.glide.get("planned")
-    tol = dict(value_tol=1e-14, rate_tol=1e-12) if fine and planned else {}
+    factor = _refinement(fine)
+    tol = dict(value_tol=1e-11 / factor, rate_tol=1e-9 / factor) if planned and factor != 1.0 else {}
     if not planned:
         tol["scale_floor"] = SCALE_FLOOR
     spans, rows = sample_intervals(fn, sec.breakpoints(), values=True, **tol)
@@ -110,17 +126,24 @@ def _sample_section(sec, fine: bool = True) -> tuple[np.ndarray, dict[str, np.nd
     return np.concatenate(spans), v
 
 
-def schedule_from_trace(trace: FigureTrace, *, fine: bool = True) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
+def schedule_from_trace(trace: FigureTrace, *, fine: bool | float = True) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
     """Sample every section's controls densely enough for cubic Hermite interpolation.
 
-    Planned sections (:mod:`skatetrace.planning`) are sampled a thousand times more finely than
-    the others (values to 1e-14 of their largest, rates to 1e-12), unless ``fine`` is False: the
-    mass moves fast through their rests, where the replay's momenta must cancel its rates.
-    :func:`~skatetrace.pipeline.trace_and_verify` tries them at the others' tolerances first.
+    Planned sections (:mod:`skatetrace.planning`) are sampled :data:`PLANNED_REFINEMENT` (a thousand)
+    times more finely than the others (values to 1e-14 of their largest, rates to 1e-12): the mass
+    moves fast through their rests, where the replay's momenta must cancel its rates. ``fine=False``
+    samples them as the others, and a number ``fine >= 1`` that many times more finely.
+    :func:`~skatetrace.pipeline.trace_and_verify` tries them coarser first.
+
+    Raises
+    ------
+    ValueError
+        If ``fine`` is neither a bool nor a number >= 1.
 
     Returns the schedule and the matching solver states (``x, y, theta, p1, p2, xi1, xi2``) at the
     same rows, for ``controls.csv``.
     """
+    _refinement(fine)  # refused before any work
     cols: dict[str, list] = {k: [] for k in ("t", "a", "b", "adot", "bdot", "section", "piece",
                                               "x", "y", "theta", "p1", "p2", "xi1", "xi2")}
     # Sections traced once and reused by trace_figure (the same shape elsewhere in the figure)
