@@ -104,3 +104,32 @@ def test_an_unknown_engine_is_refused(planned_arc):
     params, ref, law, z0, t = planned_arc
     with pytest.raises(ValueError, match="engine"):
         replay_law(ref, law, params, z0, t, engine="fortran")
+
+
+def test_a_section_along_a_level_line_replays_under_its_law():
+    """The heading of a line drawn level is zero all along: held to its own scale, its tolerance was a
+    denormal (1e-314), DOP853's first step came out zero and the compiled replay raised
+    ZeroDivisionError (simple-icons' orange logo crashed the command line's verification)."""
+    from skatetrace.figures.patterns import pattern
+
+    fig = pattern("line")
+    trace = plan_figure(fig, options=st.TraceOptions(reach=1.0))
+    assert trace.success, trace.message
+    ref = section_reference(trace.sections[0], trace.params)
+    assert np.max(np.abs(ref.z[2])) == 0.0 and np.max(np.abs(ref.zdot[2])) > 0.0  # a heading rate of round-off
+    law = design(ref, trace.params, default_gains(fig.size()))
+    t = np.linspace(0.0, ref.duration, 50)
+    states, _rates, correction, ok = replay_law(ref, law, trace.params, ref.state_at(0.0)[0][:, 0], t)
+    assert ok and np.all(np.isfinite(states))
+    assert correction < 1e-6  # on the trace the law barely corrects
+    assert np.max(np.hypot(*(states[3:5] - ref.state_at(t)[0][3:5]))) < 1e-9 * fig.size()
+
+
+def test_a_variable_at_zero_takes_the_scale_of_its_kind():
+    from skatetrace.feedback.closed_loop import _variable_scales
+
+    z = np.array([[2.0, -3.0], [90.0, 80.0], [0.0, 0.0], [0.0, 0.0], [-1.5, 4.0], [0.3, -0.2], [1e-12, 0.0]])
+    np.testing.assert_array_equal(_variable_scales(z), [3.0, 90.0, 1.0, 4.0, 4.0, 0.3, 0.3])
+    z[2], z[3], z[6] = [0.0, 1e-3], [1e-8, 0.0], [0.0, 1e-6]
+    np.testing.assert_array_equal(_variable_scales(z), [3.0, 90.0, 1e-3, 1e-8, 4.0, 0.3, 1e-6])  # their own
+    np.testing.assert_array_equal(_variable_scales(np.zeros((7, 3))), [1e-300, 1e-300, 1.0] + [1e-300] * 4)

@@ -167,3 +167,13 @@ def test_reused_sections_are_sampled_as_if_alone(flower):
         np.testing.assert_array_equal(getattr(again, k), getattr(schedule, k))
     for k in states:
         np.testing.assert_array_equal(states[k], states0[k])
+
+
+def test_a_zero_trial_step_gives_a_zero_first_step_not_an_error():
+    # a derivative beyond the range of its tolerance makes scipy's trial step 0 and d2 = inf (numpy's
+    # division); compiled, the division raised ZeroDivisionError
+    from skatetrace.dynamics import dop853
+
+    f0, f1, scale = np.array([1.0, 2.0]), np.array([1.5, 2.0]), np.array([1e-9, 1e-9])
+    assert dop853.initial_step(0.0, 1e300, scale, f0, f1, 1.0) == 0.0
+    assert 0.0 < dop853.initial_step(1e-3, 1.0, scale, f0, f1, 1.0) <= 1.0

@@ -139,8 +139,13 @@ def initial_step_trial(y0, f0, interval, rtol, atol):
 
 @njit(cache=True)
 def initial_step(h0, d1, scale, f0, f1, interval):
-    """Second half of scipy's ``select_initial_step`` for an 8th-order method."""
-    d2 = rms((f1 - f0) / scale) / h0
+    """Second half of scipy's ``select_initial_step`` for an 8th-order method.
+
+    A trial step of zero (a derivative beyond the floating-point range of its tolerance) gives
+    ``d2 = inf`` as numpy's division does for scipy, and a first step of zero: the loop then starts
+    from its smallest step. Compiled, the division would raise ``ZeroDivisionError`` instead.
+    """
+    d2 = rms((f1 - f0) / scale) / h0 if h0 != 0.0 else math.inf
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
     else:
