@@ -189,3 +189,49 @@ def test_a_tip_that_turns_by_143_degrees_within_a_fifth_of_a_millimetre_is_a_cus
         assert fit.success and fit.hausdorff <= 1e-3
         assert sum(abs(r.corner or 0.0) > 3.0 for r in fit.runs) == 1  # the tip is a reversal
         assert all(abs(s.curvature) < 300.0 for r in fit.runs for s in r.segments)  # none of 1 mm radius (now 80)
+
+
+def _hooked_join():
+    """Two cubics shaped like the hook in ionicons' logo-vk at 6 m (its 512-unit page, y up): the second
+    leaves the join on a handle 6 mm long pointing back against its travel, so its tangent makes a
+    121-degree corner with the first, and turns back through 125 degrees within a tenth of a millimetre."""
+    k = 6.0 / 512
+
+    def rel(p0, *ds):
+        return tuple((p0[0] + k * dx, p0[1] - k * dy) for dx, dy in ((0.0, 0.0), *ds))
+
+    a = rel((0.0, 0.0), (-7.62, -10.25), (-5.59, -14.35), (0.0, -23.57))
+    b = rel(a[-1], (-0.51, 0.0), (63.55, -91.22), (70.15, -122.0))
+    return Path((BezierPiece(a), BezierPiece(b)))
+
+
+def test_an_end_that_hooks_within_the_tolerance_is_taken_by_its_chord():
+    from skatetrace.drawings.fitting import fit_path
+    from skatetrace.drawings.splitting import HOOK_DEG, _split
+
+    path = _hooked_join()
+    [_, tangents] = split_path(path)  # no tolerance: the tangents' corner
+    assert math.degrees(abs(tangents.corner)) > 120
+    [_, chord] = _split(path, 0.5, 0.5e-3, soft=True)[0]
+    assert math.degrees(abs(chord.corner)) < HOOK_DEG
+    fit = fit_path(path, 1e-3)
+    assert fit.success and fit.hausdorff <= 1e-3
+    # the join is a corner of about ten degrees, not a reversal, and no arc follows the hook (the
+    # tangents' corner gave 105 degrees, a line of 20 um and arcs of 0.8 and 2 mm radius)
+    assert math.degrees(abs(fit.runs[1].corner)) < HOOK_DEG
+    assert min(1 / abs(s.curvature) for s in fit.runs[1].segments if s.curvature) > 0.03
+
+
+def test_a_rounded_corner_is_no_hook():
+    from skatetrace.drawings.splitting import _split
+
+    # a quarter circle of radius 2 mm between two lines, fitted at 1 mm: its chords across the balls of a
+    # millimetre about its ends turn 14.5 degrees from its end tangents, which stay its own
+    r = 2e-3
+    c = 4 / 3 * (math.sqrt(2) - 1) * r
+    path = Path((LinePiece((0.0, -1.0), (0.0, 0.0)),
+                 BezierPiece(((0.0, 0.0), (0.0, c), (r - c, r), (r, r))), LinePiece((r, r), (1.0, r))))
+    [run] = _split(path, 0.5, 1e-3, soft=True)[0]
+    [plain] = _split(path, 0.5, 0.0, soft=True)[0]
+    assert [(sp.t0, sp.t1, sp.heading0, sp.heading1) for sp in run.spans] == \
+        [(sp.t0, sp.t1, sp.heading0, sp.heading1) for sp in plain.spans]

@@ -45,6 +45,18 @@ CUSP_RADIUS = 1e-10  # a speed minimum whose radius bound |r'|^2/|r''| is below 
 TIP_RADIUS = 1 / 4
 TIP_REACH = 1.0
 TIP_TURN_DEG = 120.0
+# Relative to the fit's tolerance: where a stretch's end tangent and its chord across the ball of
+# radius HOOK_REACH tolerances about that end differ by more than HOOK_DEG, the end hooks inside the
+# ball: the chord's direction is the end's, and the spans inside the ball are one (their splits at
+# the hook's curvature extrema would make the fit follow it). Ionicons' logo-vk has a cubic whose
+# first handle, 6 mm long at 6 m, points back against its travel: the curve leaves its start at
+# 121 degrees to the path before it and turns back through 125 degrees within a tenth of a
+# millimetre, 0.04 mm aside; the fit made the join a reversal followed by arcs of 0.4 mm radius that
+# no launch fits (the drawing failed after four rounds of rests). Taken by its chord, the join is a
+# corner of 18 degrees. A smooth end turns away from its chord by about HOOK_REACH * tol / (2 r),
+# beyond HOOK_DEG only at radii of curvature below the tolerance.
+HOOK_REACH = 1.0
+HOOK_DEG = 30.0
 # The arc fit (``soft``): a join turning by delta between pieces of lengths l1, l2 is also smooth
 # where the fit can round it well within the tolerance, delta <= SOFT_SHARE * tol / min(l1, l2): the
 # chain through it then bends by delta over a piece, off by about l * delta / 8 (half the
@@ -113,6 +125,60 @@ def _turn_across(piece: Piece, t: float, reach: float) -> float:
     turns = np.diff(heading)
     turns = (turns + math.pi) % (2 * math.pi) - math.pi
     return abs(float(np.sum(turns)))
+
+
+def _leaving(piece: Piece, t: float, toward: float, reach: float) -> float | None:
+    """The first parameter from ``t`` toward ``toward`` where the curve is ``reach`` away from ``r(t)``
+    (on a grid, then bisected), or None where it stays closer."""
+    p = _col(piece, "point", t)
+    grid = np.linspace(t, toward, 257)
+    xy = np.asarray(piece.point(grid), dtype=float)
+    out = np.flatnonzero(np.hypot(xy[0] - p[0], xy[1] - p[1]) >= reach)
+    if not out.size:
+        return None
+    lo, hi = grid[out[0] - 1], grid[out[0]]
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        q = _col(piece, "point", mid)
+        if math.hypot(q[0] - p[0], q[1] - p[1]) >= reach:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+def _hook(piece: Piece, t: float, toward: float, direction: np.ndarray, reach: float
+          ) -> tuple[np.ndarray, float | None]:
+    """Whether the end ``t`` of a stretch running to ``toward`` hooks within ``reach`` (:data:`HOOK_DEG`).
+
+    Returns ``(direction, None)`` where it does not; else the chord's direction across the ball of
+    radius ``reach`` about ``r(t)`` (the travel direction: arriving at ``t`` where ``toward < t``) and
+    the parameter where the curve leaves the ball. A line never hooks; nor does an end whose
+    curvature is below ``1 / reach`` (its chord across the ball turns from its tangent by about
+    ``reach * kappa / 2``, under :data:`HOOK_DEG` while the curvature keeps its order there): they
+    are not looked at, so a polyline of thousands of lines pays nothing.
+    """
+    if isinstance(piece, LinePiece):
+        return direction, None
+    d1, d2 = _col(piece, "d1", t), _col(piece, "d2", t)
+    speed = math.hypot(d1[0], d1[1])
+    with np.errstate(all="ignore"):
+        kappa = abs(d1[0] * d2[1] - d1[1] * d2[0]) / speed**3 if speed > 0 else math.inf
+    if kappa * reach < 1.0:
+        return direction, None
+    u = _leaving(piece, t, toward, reach)
+    if u is None:
+        return direction, None
+    chord = _col(piece, "point", u) - _col(piece, "point", t)
+    chord = (chord if toward > t else -chord) / math.hypot(chord[0], chord[1])
+    cos = float(np.clip(chord[0] * direction[0] + chord[1] * direction[1], -1.0, 1.0))
+    return (chord, u) if math.acos(cos) > math.radians(HOOK_DEG) else (direction, None)
+
+
+def _one_span(spans: list[Span], first: int, last: int) -> list[Span]:
+    """``spans[first..last]`` (of one piece) made one span, the others kept."""
+    a, b = spans[first], spans[last]
+    return [*spans[:first], Span(a.piece, a.t0, b.t1, a.heading0, b.heading1, "spiral", a.reason), *spans[last + 1:]]
 
 
 def _cusps(piece: Piece, scale: float, tip: float = 0.0) -> list[float]:
@@ -230,7 +296,7 @@ def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None,
     scale, pieces = prep.scale, path.pieces
     ranges = _ranges(path, prep, TIP_RADIUS * tol)
     n = len(ranges)
-    dirs_in, dirs_out = [], []
+    dirs_in, dirs_out, hooks = [], [], []
     for r in ranges:
         p, vscale = pieces[r.piece], max(prep.lengths[r.piece], 1e-300)
         chord = _col(p, "point", r.b) - _col(p, "point", r.a)
@@ -238,8 +304,17 @@ def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None,
         fallback = chord / cn if cn > 0 else np.array([1.0, 0.0])
         d_in = _direction(p, r.a, +1, vscale, r.cusp_a)
         d_out = _direction(p, r.b, -1, vscale, r.cusp_b)
-        dirs_in.append(fallback if d_in is None else d_in)
-        dirs_out.append(fallback if d_out is None else d_out)
+        d_in, d_out = (fallback if d_in is None else d_in), (fallback if d_out is None else d_out)
+        hook_in = hook_out = None
+        # a fitter's: a piece's end that hooks within its tolerance is taken by its chord (not a cusp's
+        # or a tip's, whose reversal is meant)
+        if tol > 0 and not r.cusp_a:
+            d_in, hook_in = _hook(p, r.a, r.b, d_in, HOOK_REACH * tol)
+        if tol > 0 and not r.cusp_b:
+            d_out, hook_out = _hook(p, r.b, r.a, d_out, HOOK_REACH * tol)
+        dirs_in.append(d_in)
+        dirs_out.append(d_out)
+        hooks.append((hook_in, hook_out))
     lengths = [piece_length(pieces[r.piece], r.a, r.b, 64) for r in ranges]
     fit_tol, tol = tol, math.radians(corner_tol_deg)
     # Junction j sits between range j-1 and range j; junction 0 is the closure of a closed path.
@@ -275,6 +350,12 @@ def _split(path: Path, corner_tol_deg: float, tol: float = 0.0, progress=None,
             progress(r.piece)
         spans = _spiral_spans(pieces[r.piece], r.piece, r.a, r.b, math.atan2(dirs_in[j][1], dirs_in[j][0]),
                               math.atan2(dirs_out[j][1], dirs_out[j][0]), reason[j], lengths[j])
+        hook_in, hook_out = hooks[j]
+        if hook_in is not None:  # the spans inside the hook's ball, one
+            spans = _one_span(spans, 0, next(k for k, sp in enumerate(spans) if sp.t1 >= hook_in))
+        if hook_out is not None:
+            spans = _one_span(spans, next(k for k in range(len(spans) - 1, -1, -1) if spans[k].t0 <= hook_out),
+                              len(spans) - 1)
         if j == 0 or reason[j] != "join":
             runs.append(spans)
             corners.append(corner[j])
