@@ -85,48 +85,6 @@ class Run:
     corner: float | None
 
 
-def _turn_across(piece: Piece, t: float, reach: float) -> float:
-    """How far the curve turns (radians, unsigned) between where it leaves the ball of radius ``reach`` about ``r(t)``.
-
-    On each side the parameter where the distance from ``r(t)`` first reaches ``reach`` (bisected
-    on a grid), or the piece's end if it stays inside. The turn is the total change of the
-    tangent's direction along the way (the integral of the curvature), not the angle between the
-    two end tangents, which folds back above pi: a tip that loops past a reversal, 220 degrees,
-    would read as 140. Directions are followed on grids that close in geometrically on ``t``, where
-    they turn fastest, so that no step between samples turns by pi or more.
-    """
-    p = _col(piece, "point", t)
-    ends = []
-    for side in (-1, 1):
-        grid = np.linspace(t, 0.0 if side < 0 else 1.0, 257)
-        xy = np.asarray(piece.point(grid), dtype=float)
-        d = np.hypot(xy[0] - p[0], xy[1] - p[1])
-        out = np.flatnonzero(d >= reach)
-        if out.size:
-            lo, hi = grid[out[0] - 1], grid[out[0]]
-            for _ in range(40):
-                mid = 0.5 * (lo + hi)
-                q = _col(piece, "point", mid)
-                if math.hypot(q[0] - p[0], q[1] - p[1]) >= reach:
-                    hi = mid
-                else:
-                    lo = mid
-            ends.append(hi)
-        else:
-            ends.append(grid[-1])
-    steps = np.concatenate([[0.0], np.geomspace(1e-12, 1.0, 600)])
-    grid = np.concatenate([t + (ends[0] - t) * steps[::-1], t + (ends[1] - t) * steps[1:]])
-    v = np.asarray(piece.d1(grid), dtype=float)
-    speed = np.hypot(v[0], v[1])
-    if not (speed[0] > 0 and speed[-1] > 0):
-        return 0.0
-    keep = speed > 0  # a sample at a zero speed has no direction
-    heading = np.arctan2(v[1][keep], v[0][keep])
-    turns = np.diff(heading)
-    turns = (turns + math.pi) % (2 * math.pi) - math.pi
-    return abs(float(np.sum(turns)))
-
-
 def _leaving(piece: Piece, t: float, toward: float, reach: float) -> float | None:
     """The first parameter from ``t`` toward ``toward`` where the curve is ``reach`` away from ``r(t)``
     (on a grid, then bisected), or None where it stays closer."""
@@ -145,6 +103,33 @@ def _leaving(piece: Piece, t: float, toward: float, reach: float) -> float | Non
         else:
             lo = mid
     return hi
+
+
+def _turn_across(piece: Piece, t: float, reach: float) -> float:
+    """How far the curve turns (radians, unsigned) between where it leaves the ball of radius ``reach`` about ``r(t)``.
+
+    On each side the parameter where the distance from ``r(t)`` first reaches ``reach`` (bisected
+    on a grid), or the piece's end if it stays inside. The turn is the total change of the
+    tangent's direction along the way (the integral of the curvature), not the angle between the
+    two end tangents, which folds back above pi: a tip that loops past a reversal, 220 degrees,
+    would read as 140. Directions are followed on grids that close in geometrically on ``t``, where
+    they turn fastest, so that no step between samples turns by pi or more.
+    """
+    ends = []
+    for toward in (0.0, 1.0):
+        u = _leaving(piece, t, toward, reach)
+        ends.append(toward if u is None else u)
+    steps = np.concatenate([[0.0], np.geomspace(1e-12, 1.0, 600)])
+    grid = np.concatenate([t + (ends[0] - t) * steps[::-1], t + (ends[1] - t) * steps[1:]])
+    v = np.asarray(piece.d1(grid), dtype=float)
+    speed = np.hypot(v[0], v[1])
+    if not (speed[0] > 0 and speed[-1] > 0):
+        return 0.0
+    keep = speed > 0  # a sample at a zero speed has no direction
+    heading = np.arctan2(v[1][keep], v[0][keep])
+    turns = np.diff(heading)
+    turns = (turns + math.pi) % (2 * math.pi) - math.pi
+    return abs(float(np.sum(turns)))
 
 
 def _hook(piece: Piece, t: float, toward: float, direction: np.ndarray, reach: float
