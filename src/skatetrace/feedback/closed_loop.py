@@ -26,7 +26,7 @@ from ..dynamics.model import SleighParams, body_velocities, momenta
 from ..dynamics.simulate import simulate
 from .law_replay import SpanRun, law_arrays, replay_span
 from .lqr import TrackingLaw
-from .reference import Reference, rhs
+from .reference import Reference, rhs, variable_scales
 
 __all__ = ["Plant", "LoopRun", "loop_sections", "run_loop", "section_steps"]
 
@@ -229,20 +229,6 @@ def loop_sections(refs: list[Reference | None], plant: Plant, laws: list[Trackin
         del ts, zs, rs, vs, sec  # the caller's copy is the only one left while the next section runs
 
 
-def _variable_scales(z: np.ndarray) -> np.ndarray:
-    """The largest ``|value|`` of each of the seven variables ``z`` (7, k), or of its kind where it stays at zero.
-
-    A variable within 1e-9 of zero all along, relative to its kind (the heading along a line drawn
-    level, ``x`` along one drawn upright), takes the scale of its kind: the larger of ``p1, p2``, of
-    ``x, y``, of ``a, b``, and a radian for the heading. Held to its own, its absolute tolerance was a
-    denormal number (1e-314) that no step of DOP853 could meet: the initial step came out zero.
-    """
-    big = np.max(np.abs(z), axis=1)
-    pair = np.maximum(big[[1, 0, 2, 4, 3, 6, 5]], big)
-    kind = np.array([pair[0], pair[1], 1.0, pair[3], pair[4], pair[5], pair[6]])
-    return np.maximum(np.where(big < 1e-9 * kind, kind, big), 1e-300)
-
-
 def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out, *, rtol: float = 1e-12,
                atol: float = 1e-14, max_nfev: int = 300_000, engine: str = "compiled"):
     """One sleigh (the model itself) under the law, integrated accurately: DOP853 between the rate jumps.
@@ -255,7 +241,7 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
         Section times (non-decreasing, within the section) at which to report.
     rtol, atol : float
         DOP853's tolerances; ``atol`` is relative to each variable's largest value on the reference (its
-        kind's where it stays at zero: :func:`_variable_scales`).
+        kind's where it stays at zero: :func:`~skatetrace.feedback.reference.variable_scales`).
     max_nfev : int
         Budget of evaluations of the law over the whole section; beyond it the replay stops and
         reports ``success=False``.
@@ -281,7 +267,7 @@ def replay_law(ref: Reference, law: TrackingLaw, params: SleighParams, z0, t_out
         raise ValueError(f"engine must be 'compiled' or 'scipy', got {engine!r}")
     t_out = np.asarray(t_out, dtype=float)
     end = ref.duration
-    scale = _variable_scales(ref.z) * atol
+    scale = variable_scales(ref.z) * atol
     if engine == "compiled":
         arrays = law_arrays(ref, law)
 

@@ -17,7 +17,7 @@ from ..dynamics.model import SleighParams
 from ..dynamics.model import rhs as model_rhs
 from ..figures.figure import Join, Section
 
-__all__ = ["Reference", "references", "rhs", "section_reference"]
+__all__ = ["Reference", "references", "rhs", "section_reference", "variable_scales"]
 
 _STATE = ("p1", "p2", "theta", "x", "y", "a", "b")
 
@@ -104,6 +104,22 @@ def references(sections: list[Section], schedule: ControlSchedule, states: dict[
     return out
 
 
+def variable_scales(z: np.ndarray) -> np.ndarray:
+    """The largest ``|value|`` of each of the seven variables ``z`` (7, k), or of its kind where it stays at zero.
+
+    A variable within 1e-9 of zero all along, relative to its kind (the heading along a line drawn
+    level, ``x`` along one drawn upright), takes the scale of its kind: the larger of ``p1, p2``, of
+    ``x, y``, of ``a, b``, and a radian for the heading. Held to its own, its absolute tolerance was a
+    denormal number (1e-314) that no step of DOP853 could meet, the initial step came out zero
+    (:func:`~skatetrace.feedback.closed_loop.replay_law`), and :func:`section_reference` measured its
+    interpolation error against 1e-300, never met: its rows grew to ``max_points``.
+    """
+    big = np.max(np.abs(z), axis=1)
+    pair = np.maximum(big[[1, 0, 2, 4, 3, 6, 5]], big)
+    kind = np.array([pair[0], pair[1], 1.0, pair[3], pair[4], pair[5], pair[6]])
+    return np.maximum(np.where(big < 1e-9 * kind, kind, big), 1e-300)
+
+
 def section_reference(sec, params: SleighParams, *, points: int = 20_000, tol: float = 1e-9,
                       max_points: int = 1_280_000) -> Reference:
     """A :class:`Reference` sampled from a traced section itself (the exact motion at any time).
@@ -138,7 +154,7 @@ def section_reference(sec, params: SleighParams, *, points: int = 20_000, tol: f
         mid = (t[:-1] + 0.5 * h)[h > 0]
         exact = sec.evaluate(mid)
         got, _ = ref.state_at(mid)
-        scale = np.maximum(np.max(np.abs(z), axis=1), 1e-300)
+        scale = variable_scales(z)
         err = max(float(np.max(np.abs(got[i] - exact[k]))) / scale[i] for i, k in enumerate(_STATE))
         if err <= tol:
             return ref
