@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from .corners import _wrap
-from .curves import LinePiece, Path, Piece, _col, _direction, piece_length
+from .curves import LinePiece, Path, Piece, _col, _direction, curvature, piece_length
 from .spirals import Span, _spiral_spans
 from ..errors import FitError
 
@@ -145,11 +145,7 @@ def _hook(piece: Piece, t: float, toward: float, direction: np.ndarray, reach: f
     """
     if isinstance(piece, LinePiece):
         return direction, None
-    d1, d2 = _col(piece, "d1", t), _col(piece, "d2", t)
-    speed = math.hypot(d1[0], d1[1])
-    with np.errstate(all="ignore"):
-        kappa = abs(d1[0] * d2[1] - d1[1] * d2[0]) / speed**3 if speed > 0 else math.inf
-    if kappa * reach < 1.0:
+    if abs(float(curvature(piece, float(t))[0])) * reach < 1.0:  # (NaN at a zero speed: looked at)
         return direction, None
     u = _leaving(piece, t, toward, reach)
     if u is None:
