@@ -34,7 +34,7 @@ def test_a_fresh_cache_is_cold_then_warm_in_the_next_process(tmp_path):
     code = ("import sys, skatetrace.cli.compiled as c; parts = []; print(c.cache_is_warm()); "
             "c.warm_up(lambda p, i, n: parts.append((p, i, n))); print(len(parts), parts[0][1:] if parts else None)")
     first = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    assert first.stdout.split("\n")[:2] == ["False", "6 (1, 6)"]
+    assert first.stdout.split("\n")[:2] == ["False", "7 (1, 7)"]
     again = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert again.stdout.split("\n")[:2] == ["True", "0 None"]
 

@@ -3,7 +3,7 @@
 The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`),
 the closed-loop replay (:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
 (:mod:`skatetrace.feedback.riccati`), the distance checks of
-:mod:`skatetrace.verification.verify` and the planner's exact finish (:mod:`skatetrace.planning.shooting`)
+:mod:`skatetrace.verification.verify`, the spirals' geometry (:mod:`skatetrace.figures.spiral_paths`) and the planner's exact finish (:mod:`skatetrace.planning.shooting`)
 are compiled by numba with ``cache=True``: the first run on a machine compiles them (10-30 s,
 depending on the machine) and writes the machine code to numba's cache (the ``__pycache__`` folders
 beside the sources, or, where those cannot be written, numba's folder in the user's cache directory,
@@ -37,6 +37,9 @@ ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
     ("the closed-loop replay", (("skatetrace.feedback.law_replay", "_run"),)),
     ("the tracking law's Riccati equation", (("skatetrace.feedback.riccati", "_run"),)),
     ("the distance checks", (("skatetrace.verification.verify", "_golden_distances"), ("skatetrace.verification.verify", "_hermite_distance"))),
+    ("the spirals' geometry", (("skatetrace.figures.spiral_paths", "cell_nodes"),
+                               ("skatetrace.figures.spiral_paths", "positions"),
+                               ("skatetrace.figures.spiral_paths", "foot_points"))),
     ("the planner's exact finish", (("skatetrace.planning.shooting", "legs_from"),
                                     ("skatetrace.planning.shooting", "segment_ends"),
                                     ("skatetrace.planning.shooting", "jacobian_columns"))),
@@ -224,6 +227,7 @@ def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
         from ..tracing.sections import TraceOptions
 
         _replay_under_a_law(trace_and_verify(pattern("circle"), options=TraceOptions()).trace)
+        _spiral_distance()
         _finish_at_rest()
     return time.perf_counter() - start
 
@@ -244,6 +248,16 @@ def _replay_under_a_law(trace) -> None:
     design(ref, trace.params, default_gains(trace.figure.size()))
     law = TrackingLaw(reference=ref, t=ref.grid, K=np.zeros((ref.grid.size, 2, 7)), params=trace.params)
     replay_law(ref, law, trace.params, ref.state_at(0.0)[0][:, 0], [0.0, ref.duration])
+
+
+def _spiral_distance() -> None:
+    """Compile the spirals' geometry, which only the exact mode's figures reach: a point's distance to a
+    clothoid (its cells, positions and foot point)."""
+    import numpy as np
+
+    from ..figures.geometry import Pose, Spiral, distance_to_segment
+
+    distance_to_segment(np.array([[0.5], [0.5]]), Pose(0.0, 0.0, 0.0), Spiral((0.0, 1.0, 0.0, 0.0), 1.0))
 
 
 def _finish_at_rest() -> None:

@@ -15,10 +15,11 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .spiral_paths import cell_nodes, foot_points, positions
+
 __all__ = ["Pose", "Segment", "Spiral", "advance", "travel", "segment_points", "distance_to_segment",
            "rigid_motion_centre", "shifted_polynomial"]
 
-_GL10 = np.polynomial.legendre.leggauss(10)
 _CELL_TURN = 0.2  # largest heading change (radians) over one quadrature cell of a spiral
 
 
@@ -132,41 +133,29 @@ def shifted_polynomial(coefficients, origin: float, sign: float) -> tuple[float,
     return tuple(out)
 
 
-def _spiral_grid(spiral: Spiral) -> np.ndarray:
-    """Cell boundaries on ``[0, length]`` over which the heading turns by at most ``_CELL_TURN``."""
-    n = max(1, math.ceil(spiral.max_abs_curvature() * spiral.length / _CELL_TURN))
-    return np.linspace(0.0, spiral.length, n + 1)
-
-
-def _spiral_offsets(spiral: Spiral, heading: float, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Displacement from arc length ``a`` to ``b`` (arrays of the same shape; ``|b - a|`` within a cell)."""
-    x, w = _GL10
-    mid, half = 0.5 * (a + b), 0.5 * (b - a)
-    sig = mid[..., None] + half[..., None] * x
-    th = heading + spiral.heading_change(sig)
-    return np.stack([half * (np.cos(th) @ w), half * (np.sin(th) @ w)])
+def _cells(spiral: Spiral) -> int:
+    """Number of equal cells of ``spiral`` over which the heading turns by at most ``_CELL_TURN``."""
+    return max(1, math.ceil(spiral.max_abs_curvature() * spiral.length / _CELL_TURN))
 
 
 def _spiral_path(pose: Pose, spiral: Spiral):
-    """``s -> (x, y, heading)`` along ``spiral`` laid out from ``pose``, for arrays ``s``.
+    """``s -> (x, y, heading)`` along ``spiral`` laid out from ``pose``, for 1-D arrays ``s``.
 
-    The positions of the cell boundaries (:func:`_spiral_grid`) are integrated once, here, and
-    each query from the nearest of them (at most half a cell away): a search that travels along
-    the same spiral again and again (Newton's method on a foot point) pays for them once.
+    The positions of the cell boundaries (:func:`~skatetrace.figures.spiral_paths.cell_nodes`) are
+    integrated once, here, and each query from the nearest of them (at most half a cell away): a
+    search that travels along the same spiral again and again (Newton's method on a foot point)
+    pays for them once. Returns the function and the compiled path's arguments (for
+    :func:`~skatetrace.figures.spiral_paths.foot_points`).
     """
-    grid = _spiral_grid(spiral)
-    x0, y0, th0 = pose
-    cells = _spiral_offsets(spiral, th0, grid[:-1], grid[1:])
-    node_x = x0 + np.concatenate([[0.0], np.cumsum(cells[0])])
-    node_y = y0 + np.concatenate([[0.0], np.cumsum(cells[1])])
+    c = np.array(spiral.coefficients, dtype=float)
+    length, n, heading = float(spiral.length), _cells(spiral), float(pose[2])
+    node_x, node_y = cell_nodes(c, length, n, float(pose[0]), float(pose[1]), heading)
+    args = (c, length, n, heading, node_x, node_y)
 
     def at(s: np.ndarray):
-        j = np.clip(np.rint(s / grid[-1] * (grid.size - 1)).astype(int) if grid[-1] > 0 else np.zeros(s.shape, int),
-                    0, grid.size - 1)
-        off = _spiral_offsets(spiral, th0, grid[j], s)
-        return node_x[j] + off[0], node_y[j] + off[1], th0 + spiral.heading_change(s)
+        return positions(*args, np.ascontiguousarray(s, dtype=float))
 
-    return at
+    return at, args
 
 
 def travel(pose: Pose, piece, s):
@@ -176,7 +165,7 @@ def travel(pose: Pose, piece, s):
     """
     if isinstance(piece, Spiral):
         s = np.asarray(s, dtype=float)
-        x, y, th = _spiral_path(pose, piece)(s.ravel())
+        x, y, th = _spiral_path(pose, piece)[0](s.ravel())
         return x.reshape(s.shape), y.reshape(s.shape), th.reshape(s.shape)
     return advance(pose, piece.curvature, s)
 
@@ -245,21 +234,14 @@ def _distance_to_spiral(points: np.ndarray, pose: Pose, spiral: Spiral) -> np.nd
     kmax = spiral.max_abs_curvature()
     n = int(min(max(65, math.ceil(4.0 * kmax * L) * 8 + 1), 20001))
     sig = np.linspace(0.0, L, n)
-    path = _spiral_path(pose, spiral)  # its cells integrated once for the ten calls below
+    path, args = _spiral_path(pose, spiral)  # its cells integrated once for the search below
     x, y, _ = path(sig)
     _, idx = cKDTree(np.column_stack([x, y])).query(points.T)
-    t = sig[idx]
-    for _ in range(8):
-        fx, fy, th = path(t)
-        dx, dy = fx - points[0], fy - points[1]
-        c, s_ = np.cos(th), np.sin(th)
-        g = dx * c + dy * s_  # derivative of half the squared distance
-        dg = 1.0 + spiral.curvature_at(t) * (-dx * s_ + dy * c)
-        step = np.where(dg > 0.1, g / np.where(dg > 0.1, dg, 1.0), g)
-        t = np.clip(t - np.clip(step, -L / (n - 1), L / (n - 1)), 0.0, L)
+    px, py = np.ascontiguousarray(points[0]), np.ascontiguousarray(points[1])
+    t = foot_points(*args, px, py, sig[idx], L / (n - 1), 8)
     fx, fy, _ = path(t)
-    d = np.hypot(fx - points[0], fy - points[1])
-    return np.minimum(d, np.hypot(x[idx] - points[0], y[idx] - points[1]))
+    d = np.hypot(fx - px, fy - py)
+    return np.minimum(d, np.hypot(x[idx] - px, y[idx] - py))
 
 
 def rigid_motion_centre(start: Pose, end: Pose) -> tuple[float, float] | None:
