@@ -310,3 +310,28 @@ def test_run_jobs_in_chunks_runs_here_what_a_dead_worker_did_not_send(forking):
     out = list(processes.run_jobs(_dies_in_a_worker_on_seven, list(range(10)), workers=2, chunk=3))
     assert [v for v, _ in out] == list(range(10))
     assert out[7][1] == _PARENT  # computed here, after its worker died
+
+
+def _pid_after(x):
+    """The worker's pid at once for job 0; any other job sleeps for a minute (a program left running)."""
+    import time
+
+    if x:
+        time.sleep(60.0)
+    return os.getpid()
+
+
+def test_run_jobs_closed_early_ends_its_workers_at_once(forking):
+    """A caller that stops asking (a planning budget spent) leaves no worker at work on a dropped job:
+    one would hold the interpreter's exit until its job ends (concurrent.futures joins them then)."""
+    import time
+
+    solved = processes.run_jobs(_pid_after, [0, 1, 2], workers=2)
+    next(solved)
+    time.sleep(0.2)  # the other worker is asleep in job 1
+    children = {p.pid for p in __import__("multiprocessing").active_children()}
+    start = time.perf_counter()
+    solved.close()
+    while children & {p.pid for p in __import__("multiprocessing").active_children()}:
+        assert time.perf_counter() - start < 10.0, "a worker was left at its job"
+        time.sleep(0.05)

@@ -95,9 +95,14 @@ def recording_interrupts():
 
 
 def _stop(pool: ProcessPoolExecutor) -> None:
-    """Cancel the jobs not started and end the workers (an interrupt reached the parent only, say)."""
+    """Cancel the jobs not started and end the workers (an interrupt reached the parent only, say).
+
+    The workers are taken before the shutdown, which forgets them: a worker left at its job would
+    hold the interpreter's exit until the job ends (a dropped planning program: seconds).
+    """
+    processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for process in list((getattr(pool, "_processes", None) or {}).values()):
+    for process in processes:
         process.terminate()
 
 
