@@ -58,7 +58,14 @@ def test_polish_rejects_a_duration_of_the_wrong_sign(monkeypatch):
     from skatetrace.dynamics.model import SleighParams
 
     length = 1.0
-    monkeypatch.setattr(maneuver, "root", lambda *a, **k: SimpleNamespace(x=np.array([1.0, -0.5])))
+    def lands_on(z):
+        """MINPACK's iteration reduced to one iterate, ``z``, which it evaluates and returns."""
+        def fake_root(fun, x0, **kw):
+            fun(np.array(z))
+            return SimpleNamespace(x=np.array(z))
+        return fake_root
+
+    monkeypatch.setattr(maneuver, "root", lands_on([1.0, -0.5]))
     monkeypatch.setattr(maneuver, "_integrate", lambda params, y0, legs_spec, u, tau, **kw: (
         [None] * len(legs_spec), 0, tau, np.array([0.0, 0.0, 0.0, 0.0, length]), None))
     monkeypatch.setattr(maneuver, "_end_speed", lambda *a: 0.0)
@@ -67,7 +74,7 @@ def test_polish_rejects_a_duration_of_the_wrong_sign(monkeypatch):
     sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12, 0.0)
     assert sol is None and res is None
     # the same root with a positive duration is accepted
-    monkeypatch.setattr(maneuver, "root", lambda *a, **k: SimpleNamespace(x=np.array([1.0, 0.5])))
+    monkeypatch.setattr(maneuver, "root", lands_on([1.0, 0.5]))
     sol, res, _ = maneuver._polish_stop(params, [(1.0, math.inf)], y0, 1.0, 1.0, length, 0.3, 2.0, 1e-10, 1e-12, 0.0)
     assert sol == pytest.approx((0.3, 1.0)) and res == {"end_speed": 0.0, "length": 0.0}
 
@@ -94,6 +101,79 @@ def test_polish_integrations_end_at_the_singular_limit(monkeypatch):
                                         1e-10, 1e-12, 0.05)
     assert sol is None and res is None
     assert seen and all(v == 0.05 for v in seen)
+
+
+def _linear_polish(monkeypatch, root_spy=None):
+    """_polish_stop on residuals linear in (alpha / alpha0, tau / tau0), zero at (1.25, 0.8); the residuals of
+    every evaluation in order."""
+    from skatetrace.tracing import maneuver
+
+    seen = []
+
+    def integrate(params, y0, legs_spec, alpha, tau, **kw):
+        z = np.array([alpha / 0.3, tau / 2.0])
+        r = np.array([[2.0, 0.5], [-0.3, 1.0]]) @ (z - [1.25, 0.8])
+        seen.append(r)
+        return [None] * len(legs_spec), 0, tau, np.array([0.0, r[0], 0.0, 0.0, 1.0 + r[1]]), None
+
+    monkeypatch.setattr(maneuver, "_integrate", integrate)
+    monkeypatch.setattr(maneuver, "_end_speed", lambda params, legs_spec, yf, u: yf[1])
+    if root_spy is not None:
+        monkeypatch.setattr(maneuver, "root", root_spy)
+    out = maneuver._polish_stop(SleighParams(), [(1.0, math.inf)], np.zeros(5), 1.0, 1.0, 1.0, 0.3, 2.0,
+                                1e-10, 1e-12, 0.0)
+    return out, seen
+
+
+def test_polish_stops_at_its_first_iterate_that_passes(monkeypatch):
+    # MINPACK went on towards an xtol of 1e-14 after the residuals had passed (up to 213 integrations
+    # where 30 had done): the polish now takes the first iterate that passes, and integrates no more
+    (sol, res, count), seen = _linear_polish(monkeypatch)
+    assert sol == pytest.approx((0.375, 1.6), rel=1e-10)
+    assert count == len(seen) < 20
+    passed = [bool(np.all(np.abs(r) < 1e-11)) for r in seen]
+    assert passed[-1] and not any(passed[:-1])
+    assert res == {"end_speed": float(seen[-1][0]), "length": float(seen[-1][1])}
+
+
+def _polish_on(monkeypatch, residuals):
+    """_polish_stop under an iteration that evaluates up to 600 iterates, whose residuals are
+    ``residuals(k)`` at the k-th; its answer and the iterates evaluated."""
+    from types import SimpleNamespace
+
+    from skatetrace.tracing import maneuver
+
+    def endless(fun, x0, **kw):
+        for k in range(600):
+            fun(np.array([1.0, 1.0 + 1e-3 * k]))
+        return SimpleNamespace(x=np.asarray(x0))
+
+    def integrate(params, y0, legs_spec, alpha, tau, **kw):
+        r = residuals(round((tau / 2.0 - 1.0) * 1e3))
+        return [None] * len(legs_spec), 0, tau, np.array([0.0, r, 0.0, 0.0, 1.0]), None
+
+    monkeypatch.setattr(maneuver, "root", endless)
+    monkeypatch.setattr(maneuver, "_integrate", integrate)
+    monkeypatch.setattr(maneuver, "_end_speed", lambda params, legs_spec, yf, u: yf[1])
+    return maneuver._polish_stop(SleighParams(), [(1.0, math.inf)], np.zeros(5), 1.0, 1.0, 1.0, 0.3, 2.0,
+                                 1e-10, 1e-12, 0.0)
+
+
+def test_polish_gives_up_where_it_stalls(monkeypatch):
+    from skatetrace.tracing import maneuver
+
+    window = maneuver._POLISH_WINDOW
+    # no progress at all: given up at the end of its second window, not at MINPACK's limit of 600
+    sol, res, count = _polish_on(monkeypatch, lambda k: 0.1)
+    assert sol is None and res is None and count == 2 * window
+    # a factor 1.2 a window is too little: given up after the second window's
+    sol, _res, count = _polish_on(monkeypatch, lambda k: 0.1 * 1.2 ** (-k / window))
+    assert sol is None and count == 2 * window
+    # slow but steady progress (a factor 1.7 a window, as the slowest polishes that succeeded) goes on
+    # to the iterate that passes, past the second window
+    passes = 3 * window + 7
+    sol, res, count = _polish_on(monkeypatch, lambda k: 1e-12 if k >= passes else 0.1 * 1.7 ** (-k / window))
+    assert sol is not None and count == passes + 1 and res["end_speed"] == 1e-12
 
 
 # ---- issue 6: the faster solve finds the same manoeuvres ---------------------------------------
