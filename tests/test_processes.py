@@ -1,6 +1,8 @@
 """Work shared out between this process and forked children (skatetrace.processes): same answers, nothing lost."""
 
+import multiprocessing
 import os
+import time
 
 import pytest
 
@@ -314,8 +316,6 @@ def test_run_jobs_in_chunks_runs_here_what_a_dead_worker_did_not_send(forking):
 
 def _pid_after(x):
     """The worker's pid at once for job 0; any other job sleeps for a minute (a program left running)."""
-    import time
-
     if x:
         time.sleep(60.0)
     return os.getpid()
@@ -324,14 +324,12 @@ def _pid_after(x):
 def test_run_jobs_closed_early_ends_its_workers_at_once(forking):
     """A caller that stops asking (a planning budget spent) leaves no worker at work on a dropped job:
     one would hold the interpreter's exit until its job ends (concurrent.futures joins them then)."""
-    import time
-
     solved = processes.run_jobs(_pid_after, [0, 1, 2], workers=2)
     next(solved)
     time.sleep(0.2)  # the other worker is asleep in job 1
-    children = {p.pid for p in __import__("multiprocessing").active_children()}
+    children = {p.pid for p in multiprocessing.active_children()}
     start = time.perf_counter()
     solved.close()
-    while children & {p.pid for p in __import__("multiprocessing").active_children()}:
+    while children & {p.pid for p in multiprocessing.active_children()}:
         assert time.perf_counter() - start < 10.0, "a worker was left at its job"
         time.sleep(0.05)

@@ -2,12 +2,13 @@
 
 The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`),
 the closed-loop replay (:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
-(:mod:`skatetrace.feedback.riccati`), the distance checks of
-:mod:`skatetrace.verification.verify`, the spirals' geometry (:mod:`skatetrace.figures.spiral_paths`) and the planner's exact finish (:mod:`skatetrace.planning.shooting`)
-are compiled by numba with ``cache=True``: the first run on a machine compiles them (10-30 s,
-depending on the machine) and writes the machine code to numba's cache (the ``__pycache__`` folders
-beside the sources, or, where those cannot be written, numba's folder in the user's cache directory,
-or ``NUMBA_CACHE_DIR``); every later run loads it in a fraction of a second.
+(:mod:`skatetrace.feedback.riccati`), the distance checks of :mod:`skatetrace.verification.verify`,
+the spirals' geometry (:mod:`skatetrace.figures.spiral_paths`) and the planner's exact finish
+(:mod:`skatetrace.planning.shooting`) are compiled by numba with ``cache=True``: the first run on a
+machine compiles them (10-30 s, depending on the machine) and writes the machine code to numba's
+cache (the ``__pycache__`` folders beside the sources, or, where those cannot be written, numba's
+folder in the user's cache directory, or ``NUMBA_CACHE_DIR``); every later run loads it in a
+fraction of a second.
 The cache is keyed by the source file's time stamp and size, the function's bytecode and the CPU, so
 it is rebuilt after an upgrade or on another machine, never reused wrongly.
 
