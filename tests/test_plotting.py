@@ -186,6 +186,29 @@ def test_save_all_writes_five_pngs_and_checks_its_unit(flower, tmp_path):
     assert not (tmp_path / "x").exists()
 
 
+def test_plots_drawn_ahead_in_primed_children_are_save_alls_images(flower, tmp_path, monkeypatch):
+    # the command line's plots: children made ready while the figure is traced draw them; the same
+    # images as save_all's, written and recorded by this process
+    from skatetrace import processes
+    from skatetrace.outputs.files import record_writes
+
+    tr, rep = flower
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    expected = plotting.save_all(tr, rep, tmp_path / "a", unit="m")
+    seen = []
+    with plotting.PlotsAhead(workers=2) as plots:
+        assert plots._primed.children == 2
+        with pytest.raises(ValueError, match="unit must be"):
+            plots.start(tr, rep, unit="km")  # refused before anything is handed to the children
+        plots.start(tr, rep, unit="m")
+        with record_writes(seen.append):
+            written = plots.write(tmp_path / "b")
+    assert [p.name for p in seen] == [p.name for p in written] == [p.name for p in expected]
+    assert [p.read_bytes() for p in written] == [p.read_bytes() for p in expected]
+
+
 def test_the_plots_draw_a_bounded_number_of_rows_and_keep_every_rest(flower):
     """Issue 19: a long figure's replay is cut to about PLOT_ROWS rows before it is drawn, keeping the
     first and last row of every section (the rests the plots mark)."""
@@ -263,11 +286,11 @@ def test_trace_passes_the_figure_unit_to_the_plots(tmp_path, monkeypatch, capsys
 
     seen = {}
 
-    def fake_save_all(trace, report, out, *, unit="model"):
+    def fake_start(self, trace, report, *, unit="model"):
         seen["unit"] = unit
-        return []
+        self._primed.submit(lambda shared, item: b"", None, [])  # no images: write() writes none
 
-    monkeypatch.setattr(plotting, "save_all", fake_save_all)
+    monkeypatch.setattr(plotting.PlotsAhead, "start", fake_start)
     svg = tmp_path / "circle.svg"
     svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><circle cx="50" cy="50" r="40"/>'
                    '</svg>')

@@ -18,10 +18,12 @@ answer are run here. Every job runs the same code either way, so the answers do 
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import math
 import multiprocessing
 import os
+import pickle
 import signal
 import threading
 import time
@@ -29,8 +31,8 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Generic, Iterable, Iterator, Sequence, TypeVar
 
-__all__ = ["DEFAULT_MAX_WORKERS", "IDLE_NICENESS", "Background", "available_workers", "can_fork", "evaluated_ahead",
-           "map_forked", "quiet_on_interrupt", "recording_interrupts", "run_jobs", "worker_count"]
+__all__ = ["DEFAULT_MAX_WORKERS", "IDLE_NICENESS", "Background", "Primed", "available_workers", "can_fork",
+           "evaluated_ahead", "map_forked", "quiet_on_interrupt", "recording_interrupts", "run_jobs", "worker_count"]
 
 #: Processes used when the caller does not say: each planner worker holds an IPOPT of up to a few
 #: hundred MB, so a many-core machine is not filled with them by default.
@@ -172,8 +174,13 @@ def _forked_part(fn: Callable, items: list, conn, niceness: int = 0) -> None:
     if niceness:
         with contextlib.suppress(AttributeError, OSError):  # no os.nice (Windows), or not allowed
             os.nice(niceness)
+    _send_answers(conn, lambda: [fn(item) for item in items])
+
+
+def _send_answers(conn, compute: Callable[[], list]) -> None:
+    """In a forked child: ``compute()`` sent back through ``conn`` (None on any failure), and ``conn`` closed."""
     try:
-        results = [fn(item) for item in items]
+        results = compute()
     except BaseException:  # the parent runs this share again, and reports the error there
         results = None
     try:
@@ -242,12 +249,139 @@ class _Child:
 
     def cpu_seconds(self) -> float | None:
         """The processor time the child has used so far (Linux's ``/proc``), or None where it cannot be read."""
-        try:
-            with open(f"/proc/{self._process.pid}/stat", "rb") as f:
-                fields = f.read().rsplit(b")", 1)[1].split()
-            return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-        except (OSError, ValueError, IndexError):
+        return _cpu_seconds(self._process.pid)
+
+
+def _cpu_seconds(pid: int) -> float | None:
+    """The processor time process ``pid`` has used so far (Linux's ``/proc``), or None where it cannot be read."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _answered(process, conn, share: float, window: float) -> list | None:
+    """The answer of a child working at idle priority, waited for while it runs on at least ``share`` of a
+    core (read every ``window`` seconds); None where it fails, dies, or other work starves it (it is ended)."""
+    used = _cpu_seconds(process.pid)
+    while not conn.poll(window):
+        now = _cpu_seconds(process.pid)
+        if now is None or used is None or now - used < share * window:
             return None
+        used = now
+    try:
+        return conn.recv()
+    except (EOFError, OSError):
+        return None
+
+
+def _primed_part(prime: Callable[[], object], conn) -> None:
+    """In a forked child of :class:`Primed`, at idle priority: ``prime()``, then one batch ``(fn, shared,
+    items)`` from ``conn``, answered with ``[fn(shared, item) ...]`` (None on any failure)."""
+    quiet_on_interrupt()
+    with contextlib.suppress(AttributeError, OSError):  # no os.nice (Windows), or not allowed
+        os.nice(IDLE_NICENESS)
+    with contextlib.suppress(Exception):  # a failed preparation only costs the batch its head start
+        prime()
+    try:
+        fn, shared, items = conn.recv()
+    except (EOFError, OSError):  # never given a batch: the parent went on without it
+        return
+    _send_answers(conn, lambda: [fn(shared, item) for item in items])
+
+
+class Primed(Generic[R]):
+    """Forked children started before their work is known, each made ready by ``prime()`` meanwhile.
+
+    For work that needs a slow preparation (an import of some tenths of a second) and whose inputs
+    come late: the command line's plots need matplotlib, imported in the children while the figure
+    is traced, and the trace, known only at the end. The children work at the lowest priority
+    (:data:`IDLE_NICENESS`), on what the machine leaves idle, so that their preparation does not
+    slow the work it waits for (a planner busy on every core). :meth:`submit` hands them one
+    batch, ``fn(shared, item)`` for every item (``fn``, ``shared`` and the items pickled on the way
+    in, the results on the way out), and returns; this process goes on with other work;
+    :meth:`results` collects the answers in order. Where there are no children (``workers=1``,
+    forking not safe, the batch would not pickle) the batch is computed by :func:`map_forked`;
+    where a child fails, dies or is starved by other work, its share is computed here, so an
+    error is raised here, as without children. Use it as a context manager: leaving the block
+    ends the children still waiting or at work.
+    """
+
+    def __init__(self, prime: Callable[[], object], children: int = 2, workers: int | None = None):
+        count = worker_count(children, workers)
+        self._workers = workers
+        self._children: list = []
+        self._batch: tuple | None = None
+        if count > 1 and can_fork():
+            context = multiprocessing.get_context("fork")
+            for _ in range(count):
+                here, there = context.Pipe(duplex=True)
+                process = context.Process(target=_primed_part, args=(prime, there), daemon=True)
+                process.start()
+                there.close()
+                self._children.append((process, here))
+
+    @property
+    def children(self) -> int:
+        """How many children wait for the batch (0: :meth:`results` computes it here)."""
+        return len(self._children)
+
+    def submit(self, fn: Callable[[object, J], R], shared: object, items: Iterable[J]) -> None:
+        """Hand the children ``fn(shared, item)`` for every item, shared out in turn; returns at once
+        unless a child is still being primed (a pickled batch larger than a pipe holds waits for it)."""
+        if self._batch is not None:
+            raise RuntimeError("a Primed takes one batch; this one has been given its batch already")
+        items = list(items)
+        self._batch = (fn, shared, items)
+        n = len(self._children)
+        try:
+            for k, (_process, conn) in enumerate(self._children):
+                conn.send((fn, shared, items[k::n]))
+        except (pickle.PicklingError, TypeError, AttributeError, OSError, ValueError):
+            # the batch does not pickle, or a child is gone: :meth:`results` computes it all here
+            self._end()
+
+    def results(self, share: float = 0.5, window: float = 0.25) -> list[R]:
+        """``[fn(shared, item) for item in items]`` of the batch, in order, waited for.
+
+        A child is waited for while it runs on at least ``share`` of a core, its processor time read
+        every ``window`` seconds (as :meth:`Background.awaited`); one that other work on the machine
+        starves (it works at idle priority) is ended, and its share computed here.
+        """
+        if self._batch is None:
+            raise RuntimeError("no batch was submitted to this Primed")
+        fn, shared, items = self._batch
+        n = len(self._children)
+        if n == 0:
+            return map_forked(functools.partial(fn, shared), items, self._workers)
+        out: list = [None] * len(items)
+        try:
+            for k, (process, conn) in enumerate(self._children):
+                part = _answered(process, conn, share, window)
+                if part is not None:
+                    process.join()
+                out[k::n] = part if part is not None and process.exitcode == 0 else [fn(shared, item)
+                                                                                   for item in items[k::n]]
+        finally:
+            self._end()
+        return out
+
+    def _end(self) -> None:
+        children, self._children = self._children, []
+        for process, conn in children:
+            conn.close()
+            if process.is_alive():
+                process.terminate()
+                process.join()
+
+    def __enter__(self) -> "Primed[R]":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._end()
+
 
 
 def _called(fn: Callable[[], R]) -> R:

@@ -343,18 +343,21 @@ def _compiling():
 
 
 def _trace(args) -> int:
+    from ..outputs.plotting import PlotsAhead
     from ..processes import Background
 
     t0 = time.perf_counter()
     res = _resolve(args, args.figure)
-    # fit.png is drawn in a child while the figure is traced (which leaves a core idle at times)
+    # fit.png is drawn in a child while the figure is traced (which leaves a core idle at times),
+    # and the other plots' children import matplotlib meanwhile
     drawn = Background(partial(_fit_png, res), args.workers) if res.fit is not None and not args.no_plots else None
-    with drawn or nullcontext():
-        return _traced(args, res, drawn, t0)
+    plots = None if args.no_plots else PlotsAhead(args.workers)
+    with drawn or nullcontext(), plots or nullcontext():
+        return _traced(args, res, drawn, plots, t0)
 
 
-def _traced(args, res, drawn, t0: float) -> int:
-    """``trace`` once the figure is read: ``drawn`` is fit.png being drawn (or None), ``t0`` when the run began."""
+def _traced(args, res, drawn, plots, t0: float) -> int:
+    """``trace`` once the figure is read: ``drawn`` draws fit.png, ``plots`` the others (None without plots)."""
     from ..outputs.results import reporting as writing
     from ..outputs.results import write_results
     from ..pipeline import too_large_to_plan, trace_and_verify, trace_within_default_reach
@@ -410,15 +413,13 @@ def _traced(args, res, drawn, t0: float) -> int:
                           for ci, pi in done.rests)
         print(f"note: rests added at smooth joins ({where}): sections failed to trace or their replay strayed "
               f"more than allowed; {done.rounds} trace-and-verify rounds")
+    if plots is not None:
+        plots.start(trace, report, unit=res.unit)  # drawn in its children while the other files are written
     out = Path(args.out)
     with writing(LongWork(status, "{stage}: {done}/{total} rows")):
         write_results(out, trace, schedule, states, report, unit=res.unit, feasibility=done.feasibility)
     if res.fit is not None:
         _write_fit(res, out, None if drawn is None else drawn.result())
-    if not args.no_plots:
-        from ..outputs.plotting import save_all
-
-        save_all(trace, report, out, unit=res.unit)
     if not args.no_viewer and schedule.t.size < 2:
         print("note: viewer.html not written: no section could be traced, so there is nothing to play")
     elif not args.no_viewer:
@@ -431,6 +432,8 @@ def _traced(args, res, drawn, t0: float) -> int:
         columns = {"t": schedule.t, "a": schedule.a, "b": schedule.b, "adot": schedule.adot, "bdot": schedule.bdot,
                    **states}
         write_viewer(load_playback(staged(out / "result.json"), columns), out / "viewer.html")
+    if plots is not None:
+        plots.write(out)
     elapsed = time.perf_counter() - t0
     unit = "m" if res.unit == "m" else "model units"
     print(f"figure {figure.name}: {len(figure.curves)} curve(s), {len(trace.sections)} section(s), "

@@ -25,7 +25,8 @@ if TYPE_CHECKING:  # annotations only: importing plotting does not load the trac
     from ..verification.verify import VerificationReport
 
 __all__ = ["axis_units", "plot_figure", "plot_controls", "plot_speed", "plot_mass_path", "plot_energies",
-           "plot_fit", "plot_fit_curvature", "fit_figure", "save_all", "tradeoff_figure", "robustness_figure"]
+           "plot_fit", "plot_fit_curvature", "fit_figure", "PlotsAhead", "save_all", "tradeoff_figure",
+           "robustness_figure"]
 
 _UNITS = {
     "m": {"length": "m", "time": "s", "speed": "m/s", "acceleration": "m/s²", "energy": "J", "curvature": "1/m"},
@@ -233,7 +234,91 @@ def _thinned(report: VerificationReport, rows: int) -> VerificationReport:
     return replace(report, replay=rep.take(keep))
 
 
-def save_all(trace: FigureTrace, report: VerificationReport, out, *, unit: str = "model") -> list:
+#: The plots :func:`save_all` writes: file name (without ``.png``), function and size in inches.
+_SAVED = (("figure", plot_figure, (10, 8)), ("controls", plot_controls, (12, 4)), ("speed", plot_speed, (12, 4)),
+          ("mass_path", plot_mass_path, (9.5, 7.5)), ("energies", plot_energies, (12, 4)))
+
+
+def _ready_to_plot() -> None:
+    """Import what drawing a plot needs (matplotlib's pyplot, on its non-interactive Agg backend)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot  # noqa: F401
+
+
+def _png(shared: tuple, name: str) -> bytes:
+    """The plot ``name`` of :data:`_SAVED` drawn from ``shared = (trace, report, unit)``, as PNG bytes."""
+    import io
+
+    _ready_to_plot()
+    import matplotlib.pyplot as plt
+
+    trace, report, unit = shared
+    fn, size = next((fn, size) for plot, fn, size in _SAVED if plot == name)
+    fig, ax = plt.subplots(figsize=size, layout="constrained")
+    try:
+        fn(trace, report, ax=ax, unit=unit)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=110)
+    finally:
+        plt.close(fig)
+    return buf.getvalue()
+
+
+class PlotsAhead:
+    """The plots of :func:`save_all`, drawn in children made ready (matplotlib imported) before the trace is known.
+
+    The command line makes one as the run begins: its two children import matplotlib while the
+    figure is traced, on a core the tracing leaves idle at times; :meth:`start` hands them the
+    trace and its replay, they draw while this process writes the other files, and :meth:`write`
+    collects the images. Where it has no children (``workers=1``, forking not safe), or one fails,
+    the plots are drawn as :func:`save_all` draws them, with the same images either way. Use it
+    as a context manager: leaving the block ends children still waiting or drawing.
+    """
+
+    def __init__(self, workers: int | None = None, *, ahead: bool = True):
+        from ..processes import Primed
+
+        # ahead=False: no children now; the plots are drawn by map_forked once started
+        self._primed = Primed(_ready_to_plot, children=2 if ahead else 0, workers=workers)
+
+    def start(self, trace: FigureTrace, report: VerificationReport, *, unit: str = "model") -> None:
+        """Begin drawing the plots of ``trace`` and ``report`` (see :func:`save_all`).
+
+        Raises
+        ------
+        ValueError
+            If ``unit`` is not one of :func:`axis_units`' (before anything is drawn).
+        """
+        axis_units(unit)  # a bad unit fails before anything is drawn
+        if not self._primed.children:
+            _ready_to_plot()  # here, once, before map_forked's children are forked (they share it)
+        shared = (trace, _thinned(report, PLOT_ROWS), unit)
+        self._primed.submit(_png, shared, [name for name, _fn, _size in _SAVED])
+
+    def write(self, out) -> list:
+        """Write the plots begun by :meth:`start` into the folder ``out`` (it must exist); their paths."""
+        from pathlib import Path
+
+        from .files import atomic_write
+
+        written = []
+        # written here, so that the output folder records every file
+        for (name, _fn, _size), png in zip(_SAVED, self._primed.results()):
+            atomic_write(Path(out) / f"{name}.png", png)
+            written.append(Path(out) / f"{name}.png")
+        return written
+
+    def __enter__(self) -> "PlotsAhead":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._primed.__exit__(*exc)
+
+
+def save_all(trace: FigureTrace, report: VerificationReport, out, *, unit: str = "model",
+             workers: int | None = None) -> list:
     """Write figure.png, controls.png, speed.png, mass_path.png and energies.png into ``out``.
 
     Parameters
@@ -244,42 +329,17 @@ def save_all(trace: FigureTrace, report: VerificationReport, out, *, unit: str =
         Folder (it must exist).
     unit : {"model", "m"}
         The figure's unit of length, for the axis labels (see :func:`axis_units`).
+    workers : int, optional
+        Processes to draw them in (side by side in forked ones: half the time on two cores).
+
+    Returns
+    -------
+    list of Path
+        The files written. :class:`PlotsAhead` draws the same images, begun earlier.
     """
-    import io
-    from pathlib import Path
-
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    from ..processes import map_forked
-    from .files import atomic_write
-
-    axis_units(unit)  # a bad unit fails before anything is drawn
-    out = Path(out)
-    report = _thinned(report, PLOT_ROWS)
-    plots = (("figure", plot_figure, (10, 8)), ("controls", plot_controls, (12, 4)), ("speed", plot_speed, (12, 4)),
-             ("mass_path", plot_mass_path, (9.5, 7.5)), ("energies", plot_energies, (12, 4)))
-
-    def render(plot) -> bytes:
-        _name, fn, size = plot
-        fig, ax = plt.subplots(figsize=size, layout="constrained")
-        try:
-            fn(trace, report, ax=ax, unit=unit)
-            buf = io.BytesIO()
-            fig.savefig(buf, format="png", dpi=110)
-        finally:
-            plt.close(fig)
-        return buf.getvalue()
-
-    # drawn side by side in forked processes (half the time on two cores); written here, so that
-    # the output folder records every file
-    written = []
-    for (name, _fn, _size), png in zip(plots, map_forked(render, plots)):
-        atomic_write(out / f"{name}.png", png)
-        written.append(out / f"{name}.png")
-    return written
+    with PlotsAhead(workers, ahead=False) as plots:
+        plots.start(trace, report, unit=unit)
+        return plots.write(out)
 
 
 def plot_fit(drawing, fit, ax=None, *, exact=None, unit: str = "model"):
