@@ -59,6 +59,32 @@ def test_a_batch_is_computed_in_primed_children_in_order(forking):
     assert _PRIMED["pid"] is None  # prime() ran in the children only
 
 
+class _Counted:
+    """Counts how often it is pickled (in this process)."""
+
+    pickled = 0
+
+    def __init__(self, value):
+        self.value = value
+
+    def __reduce__(self):
+        _Counted.pickled += 1
+        return (_Counted, (self.value,))
+
+
+def _value_plus(shared, item):
+    return shared.value + item
+
+
+def test_the_shared_input_is_pickled_once_for_every_child(forking):
+    # a figure's trace runs to tens of MB: pickled once, its bytes sent to each child
+    _Counted.pickled = 0
+    with processes.Primed(_prime, children=2, workers=2) as primed:
+        primed.submit(_value_plus, _Counted(40), range(4))
+        assert primed.results() == [40, 41, 42, 43]
+    assert _Counted.pickled == 1
+
+
 def test_without_children_the_batch_is_computed_by_map_forked(forking, monkeypatch):
     seen = []
 

@@ -278,15 +278,17 @@ def _answered(process, conn, share: float, window: float) -> list | None:
 
 
 def _primed_part(prime: Callable[[], object], conn) -> None:
-    """In a forked child of :class:`Primed`, at idle priority: ``prime()``, then one batch ``(fn, shared,
-    items)`` from ``conn``, answered with ``[fn(shared, item) ...]`` (None on any failure)."""
+    """In a forked child of :class:`Primed`, at idle priority: ``prime()``, then one batch from ``conn``
+    (``fn`` and ``shared`` pickled together, then its items), answered with ``[fn(shared, item) ...]``
+    (None on any failure)."""
     quiet_on_interrupt()
     with contextlib.suppress(AttributeError, OSError):  # no os.nice (Windows), or not allowed
         os.nice(IDLE_NICENESS)
     with contextlib.suppress(Exception):  # a failed preparation only costs the batch its head start
         prime()
     try:
-        fn, shared, items = conn.recv()
+        fn, shared = pickle.loads(conn.recv_bytes())  # pickled once for every child
+        items = conn.recv()
     except (EOFError, OSError):  # never given a batch: the parent went on without it
         return
     _send_answers(conn, lambda: [fn(shared, item) for item in items])
@@ -337,8 +339,10 @@ class Primed(Generic[R]):
         self._batch = (fn, shared, items)
         n = len(self._children)
         try:
+            payload = pickle.dumps((fn, shared), protocol=pickle.HIGHEST_PROTOCOL)
             for k, (_process, conn) in enumerate(self._children):
-                conn.send((fn, shared, items[k::n]))
+                conn.send_bytes(payload)
+                conn.send(items[k::n])
         except (pickle.PicklingError, TypeError, AttributeError, OSError, ValueError):
             # the batch does not pickle, or a child is gone: :meth:`results` computes it all here
             self._end()
