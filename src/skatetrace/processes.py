@@ -387,7 +387,6 @@ class Primed(Generic[R]):
         self._end()
 
 
-
 def _called(fn: Callable[[], R]) -> R:
     return fn()
 
