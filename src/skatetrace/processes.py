@@ -170,11 +170,17 @@ def _forked_part(fn: Callable, items: list, conn, niceness: int = 0) -> None:
 
     ``niceness`` is added to the child's (:func:`os.nice`) before it starts, where the platform can.
     """
+    _child_set_up(niceness)
+    _send_answers(conn, lambda: [fn(item) for item in items])
+
+
+def _child_set_up(niceness: int) -> None:
+    """In a forked child, first: quiet on Ctrl-C (:func:`quiet_on_interrupt`), and ``niceness`` added to its
+    own (:func:`os.nice`) where it is not 0 and the platform allows."""
     quiet_on_interrupt()
     if niceness:
         with contextlib.suppress(AttributeError, OSError):  # no os.nice (Windows), or not allowed
             os.nice(niceness)
-    _send_answers(conn, lambda: [fn(item) for item in items])
 
 
 def _send_answers(conn, compute: Callable[[], list]) -> None:
@@ -262,28 +268,29 @@ def _cpu_seconds(pid: int) -> float | None:
         return None
 
 
-def _answered(process, conn, share: float, window: float) -> list | None:
-    """The answer of a child working at idle priority, waited for while it runs on at least ``share`` of a
-    core (read every ``window`` seconds); None where it fails, dies, or other work starves it (it is ended)."""
-    used = _cpu_seconds(process.pid)
-    while not conn.poll(window):
-        now = _cpu_seconds(process.pid)
-        if now is None or used is None or now - used < share * window:
-            return None
+def _while_running(ready: Callable[[float], bool], cpu: Callable[[], float | None], share: float,
+                   window: float) -> bool:
+    """Whether ``ready(window)`` comes true while a child runs on at least ``share`` of a core.
+
+    Its processor time ``cpu()`` is read every ``window`` seconds; False as soon as it used less
+    (other work on the machine starves it), or where its processor time cannot be read (not Linux).
+    """
+    used = cpu()
+    while used is not None:
+        if ready(window):
+            return True
+        now = cpu()
+        if now is None or now - used < share * window:
+            return False
         used = now
-    try:
-        return conn.recv()
-    except (EOFError, OSError):
-        return None
+    return False
 
 
 def _primed_part(prime: Callable[[], object], conn) -> None:
     """In a forked child of :class:`Primed`, at idle priority: ``prime()``, then one batch from ``conn``
     (``fn`` and ``shared`` pickled together, then its items), answered with ``[fn(shared, item) ...]``
     (None on any failure)."""
-    quiet_on_interrupt()
-    with contextlib.suppress(AttributeError, OSError):  # no os.nice (Windows), or not allowed
-        os.nice(IDLE_NICENESS)
+    _child_set_up(IDLE_NICENESS)
     with contextlib.suppress(Exception):  # a failed preparation only costs the batch its head start
         prime()
     try:
@@ -363,7 +370,12 @@ class Primed(Generic[R]):
         out: list = [None] * len(items)
         try:
             for k, (process, conn) in enumerate(self._children):
-                part = _answered(process, conn, share, window)
+                part = None
+                # an answer already sent is taken whatever the child's processor time says
+                cpu = functools.partial(_cpu_seconds, process.pid)
+                if conn.poll() or _while_running(conn.poll, cpu, share, window):
+                    with contextlib.suppress(EOFError, OSError):
+                        part = conn.recv()
                 if part is not None:
                     process.join()
                 out[k::n] = part if part is not None and process.exitcode == 0 else [fn(shared, item)
@@ -438,15 +450,9 @@ class Background(Generic[R]):
         child = self._child
         if child is None:
             return None
-        used = child.cpu_seconds()
-        while used is not None:
-            if child.wait(window):
-                part = self._taken()
-                return None if part is None else (part[0],)
-            now = child.cpu_seconds()
-            if now is None or now - used < share * window:
-                break
-            used = now
+        if _while_running(child.wait, child.cpu_seconds, share, window):
+            part = self._taken()
+            return None if part is None else (part[0],)
         self.cancel()
         return None
 
