@@ -25,6 +25,14 @@ def pytest_collection_modifyitems(items):
 
 
 @pytest.fixture
+def forking(monkeypatch):
+    """Forking allowed (:func:`skatetrace.processes.can_fork`) whatever else runs in the test process."""
+    from skatetrace import processes
+
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
+
+
+@pytest.fixture
 def pools_made(monkeypatch):
     """The worker counts of the process pools :mod:`skatetrace.processes` starts, forking allowed
     whatever else runs in the test process: a test of side-by-side work asserts the pool was used."""

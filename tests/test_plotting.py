@@ -186,14 +186,12 @@ def test_save_all_writes_five_pngs_and_checks_its_unit(flower, tmp_path):
     assert not (tmp_path / "x").exists()
 
 
-def test_plots_drawn_ahead_in_primed_children_are_save_alls_images(flower, tmp_path, monkeypatch):
+def test_plots_drawn_ahead_in_primed_children_are_save_alls_images(flower, tmp_path, forking):
     # the command line's plots: children made ready while the figure is traced draw them; the same
     # images as save_all's, written and recorded by this process
-    from skatetrace import processes
     from skatetrace.outputs.files import record_writes
 
     tr, rep = flower
-    monkeypatch.setattr(processes, "can_fork", lambda: True)
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
     expected = plotting.save_all(tr, rep, tmp_path / "a", unit="m")

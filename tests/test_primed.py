@@ -12,12 +12,6 @@ _PRIMED = {"pid": None}
 _PARENT = os.getpid()
 
 
-@pytest.fixture
-def forking(monkeypatch):
-    """Forking allowed whatever else runs in the test process."""
-    monkeypatch.setattr(processes, "can_fork", lambda: True)
-
-
 def _prime():
     _PRIMED["pid"] = os.getpid()
 

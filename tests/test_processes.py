@@ -9,12 +9,6 @@ import pytest
 from skatetrace import processes
 
 
-@pytest.fixture
-def forking(monkeypatch):
-    """Forking allowed whatever else runs in the test process."""
-    monkeypatch.setattr(processes, "can_fork", lambda: True)
-
-
 def test_map_forked_is_the_list_comprehension_in_order(forking):
     offset = 1000  # a closure: nothing is pickled on the way in
     parent = os.getpid()
