@@ -277,19 +277,6 @@ def test_an_idle_child_is_waited_for_while_it_runs_and_ended_where_it_is_starved
         assert job.awaited() is None and job.result() == "here"
 
 
-def test_settled_takes_a_working_childs_answer_and_computes_a_starved_ones_here(forking):
-    import time
-
-    parent = os.getpid()
-    with processes.Background(lambda: _busy_then_pid(0.3), 2) as job:
-        assert job.settled(share=0.05) != parent  # the child's answer
-    with processes.Background(lambda: time.sleep(60) if os.getpid() != parent else "here", 2, idle=True) as job:
-        child = job._child._process
-        started = time.monotonic()
-        assert job.settled(window=0.2) == "here"  # the starved child ended, fn() computed here
-        assert time.monotonic() - started < 5 and not child.is_alive()
-
-
 def _pid_of(x):
     return x * x, os.getpid()
 

@@ -456,11 +456,6 @@ class Background(Generic[R]):
         self.cancel()
         return None
 
-    def settled(self, share: float = 0.5, window: float = 0.25) -> R:
-        """``fn()``: the child's answer, waited for while it runs (:meth:`awaited`), else computed here."""
-        waited = self.awaited(share, window)
-        return waited[0] if waited is not None else self._fn()
-
     def result(self) -> R:
         """``fn()``: the child's answer, else computed here."""
         part = self._taken()

@@ -348,9 +348,9 @@ def _trace(args) -> int:
 
     t0 = time.perf_counter()
     res = _resolve(args, args.figure)
-    # fit.png is drawn, and the other plots' children import matplotlib, on what the tracing leaves idle
-    drawn = (Background(partial(_fit_png, res), args.workers, idle=True)
-             if res.fit is not None and not args.no_plots else None)
+    # fit.png is drawn in a child while the figure is traced (which leaves a core idle at times),
+    # and the other plots' children import matplotlib meanwhile
+    drawn = Background(partial(_fit_png, res), args.workers) if res.fit is not None and not args.no_plots else None
     plots = None if args.no_plots else PlotsAhead(args.workers)
     with drawn or nullcontext(), plots or nullcontext():
         return _traced(args, res, drawn, plots, t0)
@@ -419,7 +419,7 @@ def _traced(args, res, drawn, plots, t0: float) -> int:
     with writing(LongWork(status, "{stage}: {done}/{total} rows")):
         write_results(out, trace, schedule, states, report, unit=res.unit, feasibility=done.feasibility)
     if res.fit is not None:
-        _write_fit(res, out, None if drawn is None else drawn.settled())
+        _write_fit(res, out, None if drawn is None else drawn.result())
     if not args.no_viewer and schedule.t.size < 2:
         print("note: viewer.html not written: no section could be traced, so there is nothing to play")
     elif not args.no_viewer:
