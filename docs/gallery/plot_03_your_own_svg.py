@@ -23,9 +23,9 @@ SVG = """<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 12 8">
   <path id="s-curve" d="M 1 6 C 4 9, 6 6, 6 4 C 6 2, 8 -1, 11 2" fill="none" stroke="black"/>
 </svg>"""
 
-folder = Path(tempfile.mkdtemp(prefix="skatetrace-tutorial-"))
-(folder / "s-curve.svg").write_text(SVG)
-drawing = st.load_drawing(folder / "s-curve.svg")
+with tempfile.TemporaryDirectory(prefix="skatetrace-tutorial-") as folder:  # removed when read
+    (Path(folder) / "s-curve.svg").write_text(SVG)
+    drawing = st.load_drawing(Path(folder) / "s-curve.svg")
 print(f"{drawing.name}: {len(drawing.paths)} path(s), {drawing.size():.3g} units across")
 
 # %%

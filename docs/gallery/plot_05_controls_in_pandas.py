@@ -69,6 +69,8 @@ plt.show()
 # verification and feasibility check). :func:`skatetrace.outputs.results.read_controls` reads the CSV
 # into numpy arrays without pandas.
 import json
+import shutil
 
 report = json.loads((out / "report.json").read_text())
 print(report["verdict"])
+shutil.rmtree(out)  # the tutorial's temporary folder, not left behind
