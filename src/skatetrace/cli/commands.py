@@ -621,7 +621,7 @@ def _figures(args) -> int:
 def _check_values(args) -> None:
     """Refuse bad numbers (zero, negative, NaN, infinite, out of range) before any work is done."""
     from ..figures.figure import PARAM_RANGE
-    from ..tracing.sections import SPEED_RANGE
+    from ..tracing.options import SPEED_RANGE
 
     def positive(name: str, value, upper: float = math.inf) -> None:
         if value is not None and not (math.isfinite(value) and 0 < value <= upper):
