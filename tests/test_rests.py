@@ -244,3 +244,97 @@ def test_add_rests_keeps_the_path_and_only_touches_the_named_curve():
     assert add_rests(fig, []) is fig
     with pytest.raises(FigureFormatError, match="does not follow a smooth join"):
         add_rests(fig, [(1, 0)])
+
+
+def _wiggle(n: int, curvature: float = 1.0, length: float = 0.8) -> Figure:
+    """One smooth curve of ``n`` arcs, two to the left, two to the right, and so on."""
+    segs = tuple(Segment(curvature * (-1) ** (k // 2), length) for k in range(n))
+    return Figure("wiggle", (Curve(segs, (SMOOTH,) * (n - 1), name="wiggle"),))
+
+
+def test_a_section_that_will_be_split_is_searched_less(monkeypatch):
+    # split_on_failure: more than SHORT_SECTION pieces, no search with the stops' fallbacks; more
+    # than LONG_SECTION, at most BRIEF_PLACEMENTS placements before one works
+    from skatetrace.tracing import options as opts
+    from skatetrace.tracing import sections as tracing
+    from skatetrace.tracing.search import Searched
+
+    searches = []
+
+    def failing(placements, solve, options, settled):
+        searches.append(options.max_placements)
+        failed = tracing.SectionTrace(success=False, status=tracing.TraceStatus.NO_STOP, message="no stop",
+                                      curve_index=0, section=sec, params=params, speed=1.0, glide={})
+        return Searched(best=None, first_failure=failed, attempts=1, nfev=3, deferred=True, settled={})
+
+    monkeypatch.setattr(tracing, "search_placements", failing)
+    params = _wiggle(2).params or tracing.SleighParams()
+    for pieces, split, wanted in ((opts.SHORT_SECTION, True, [256, 256]), (opts.SHORT_SECTION + 1, True, [256]),
+                                  (opts.LONG_SECTION, True, [256]), (opts.LONG_SECTION + 1, True, [opts.BRIEF_PLACEMENTS]),
+                                  (opts.LONG_SECTION + 1, False, [256, 256])):
+        searches.clear()
+        sec = _wiggle(pieces).curves[0].sections()[0]
+        out = tracing.trace_section(params, sec, TraceOptions(split_on_failure=split))
+        assert searches == wanted, (pieces, split)
+        assert not out.success and out.nfev == 3 * len(wanted)
+        assert ("to be split by a rest" in out.message) == (len(wanted) == 1)
+    with pytest.raises(ValueError, match="split_on_failure"):
+        TraceOptions(split_on_failure="yes")
+
+
+def test_a_section_searched_less_is_traced_the_same_where_it_is_traced():
+    from skatetrace.tracing import sections as tracing
+
+    sec = _wiggle(40).curves[0].sections()[0]
+    params = tracing.SleighParams()
+    full, brief = (tracing.trace_section(params, sec, TraceOptions(split_on_failure=split, workers=1))
+                   for split in (False, True))
+    assert full.success and brief.success and brief.nfev == full.nfev and brief.glide == full.glide
+    assert [ph.t1 for ph in brief.phases] == [ph.t1 for ph in full.phases]
+
+
+def test_only_a_section_whose_replay_strayed_splits_the_sections_before_it():
+    def sec(curve, traced=True, passed=True):
+        return SimpleNamespace(curve_index=curve, success=traced), {"passed": traced and passed}
+
+    def split(*rows):
+        trace = SimpleNamespace(sections=[r[0] for r in rows])
+        report = SimpleNamespace(sections=[r[1] for r in rows])
+        chosen = [id(s) for s in rests_module._to_split(trace, report)]
+        return [k for k, s in enumerate(trace.sections) if id(s) in chosen]
+
+    # an untraced section has no replay: the next starts afresh, and those before it passed
+    assert split(sec(0), sec(0), sec(0, traced=False), sec(0)) == [2]
+    # a replay that strays may carry an error from before it: its curve is split up to it
+    assert split(sec(0), sec(0, passed=False), sec(0), sec(0, traced=False)) == [0, 1, 3]
+    # ... and only its own curve
+    assert split(sec(0), sec(1), sec(1, passed=False)) == [1, 2]
+    assert split(sec(0), sec(1)) == []
+
+
+def test_a_section_left_failed_by_a_short_search_is_searched_in_full_when_the_rests_end(monkeypatch):
+    # Every section of several pieces fails its short search here; when rests are no longer added
+    # (max_rounds, or rounds that verify nothing more), those left failed are searched in full once.
+    fig = _wiggle(6)
+    flags = []
+    real = rests_module.trace_figure
+
+    def short_searches_fail(figure, params, options, **kw):
+        flags.append(options.split_on_failure)
+        trace = real(figure, params, options, **kw)
+        if not options.split_on_failure:
+            return trace
+        failed = [replace(s, success=False, status=s.status.NO_STOP, message="given up", phases=())
+                  if len(s.section.pieces) > 1 else s for s in trace.sections]
+        return replace(trace, sections=tuple(failed))
+
+    monkeypatch.setattr(rests_module, "trace_figure", short_searches_fail)
+    res = trace_and_verify(fig, rests="auto", max_rounds=0)
+    assert flags == [True, False] and res.success and res.rounds == 2 and res.rests == ()
+    assert not res.trace.options.split_on_failure
+    flags.clear()
+    res = trace_and_verify(fig, rests="auto", max_rounds=1)  # one rest, then its two halves in full
+    assert flags == [True, True, False] and res.success and res.rounds == 3 and res.rests == ((0, 3),)
+    assert [len(s.section.pieces) for s in res.trace.sections] == [3, 3]
+    flags.clear()
+    assert trace_and_verify(fig, rests="never").success and flags == [False]

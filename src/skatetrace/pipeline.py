@@ -15,10 +15,13 @@ same) splits the section in two, each with shorter manoeuvres.
 
 :func:`trace_and_verify` traces and verifies a figure and, with ``rests="auto"``, where a
 section fails (not traced, replay too far from the figure, or not at rest at its ends) adds a
-rest at the smooth join nearest the middle of it and of every section before it on its curve
-(the replay carries errors from one section into the next), then traces and verifies again,
-until everything passes or no such section has a smooth join left. ``rests="never"`` traces the
-figure as given, ``rests="joins"`` rests at every smooth join.
+rest at the smooth join nearest the middle of it, and where its replay strayed, of every section
+before it on its curve (the replay carries errors from one section into the next), then traces
+and verifies again, until everything passes or no such section has a smooth join left. Since a
+failing section is split, the tracer gives up a long one sooner
+(:attr:`~skatetrace.tracing.options.TraceOptions.split_on_failure`); where the rounds end with
+such a section failed, it is searched in full once more. ``rests="never"`` traces the figure as
+given, ``rests="joins"`` rests at every smooth join.
 """
 
 from __future__ import annotations
@@ -127,6 +130,41 @@ def _all_smooth_joins(figure: Figure) -> list[tuple[int, int]]:
             if p.join_before is not None and not p.join_before.is_cusp]
 
 
+def _to_split(trace: FigureTrace, report: VerificationReport) -> list:
+    """The sections of ``trace`` that ``rests="auto"`` splits: those that failed, and every section of a
+    curve up to its last one whose replay strayed.
+
+    The replay carries each section's end state into the next, so a replay may stray for an
+    error made before it. A section that could not be traced has no replay: the next starts
+    where the figure places it (:func:`~skatetrace.verification.verify.replay`), and the sections
+    before it, whose replays passed, are kept.
+    """
+    last_stray: dict[int, int] = {}
+    for k, (sec, checks) in enumerate(zip(trace.sections, report.sections)):
+        if sec.success and not checks.get("passed", False):
+            last_stray[sec.curve_index] = k
+    return [sec for k, (sec, checks) in enumerate(zip(trace.sections, report.sections))
+            if not (sec.success and checks.get("passed", False)) or k <= last_stray.get(sec.curve_index, -1)]
+
+
+def _searched_in_full(result: VerifiedTrace, params, rel_tol: float, cache: dict, progress) -> VerifiedTrace:
+    """``result`` traced and verified once more where sections of several pieces failed a search cut short
+    for splitting (:attr:`TraceOptions.split_on_failure`), now that they are not split further.
+
+    Those sections are searched in full: the answer is never worse for the shorter searches of the
+    rounds before. The sections traced are taken from ``cache`` (the same traces either way).
+    """
+    trace = result.trace
+    if result.success or not trace.options.split_on_failure or all(
+            sec.success or len(sec.section.pieces) == 1 for sec in trace.sections):
+        return result
+    full = replace(trace.options, split_on_failure=False)
+    known = {(key[0], full, key[2]): sec for key, sec in cache.items() if sec.success or len(key[2]) == 1}
+    trace = trace_figure(result.figure, params, full, progress=progress, cache=known)
+    schedule, states, report = _sampled_and_verified(trace, rel_tol)
+    return replace(result, trace=trace, schedule=schedule, states=states, report=report, rounds=result.rounds + 1)
+
+
 def trace_and_verify(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
                      *, rests: str = "auto", rel_tol: float = 1e-6, max_rounds: int = 8,
                      limits: HumanLimits | None = None, progress=None) -> VerifiedTrace:
@@ -135,10 +173,12 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     Parameters
     ----------
     rests : {"auto", "never", "joins"}
-        ``"auto"`` (default) adds a rest in the middle of each failing section and of the
-        sections before it on its curve, and tries again, at most ``max_rounds`` times, and
-        no more once two rounds in a row have verified no more of the figure than before them
-        (the result's ``note`` says so);
+        ``"auto"`` (default) adds a rest in the middle of each failing section (and where its
+        replay strayed, of the sections before it on its curve), and tries again, at most
+        ``max_rounds`` times, and no more once two rounds in a row have verified no more of the
+        figure than before them (the result's ``note`` says so). The sections are traced with
+        :attr:`~skatetrace.tracing.options.TraceOptions.split_on_failure`, and where the last round
+        leaves a section of several pieces failed, it is searched in full once more;
         ``"never"`` traces the figure as given; ``"joins"`` rests at every smooth join.
     rel_tol : float
         Verification tolerance as a fraction of the figure's size (:func:`~skatetrace.verification.verify.verify`).
@@ -164,12 +204,14 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     added: list[tuple[int, int]] = _all_smooth_joins(figure) if rests == "joins" else []
     current = add_rests(figure, added)
     cache: dict[tuple, Any] = {}  # sections solved in one round are reused in the next
+    # a section that fails is split here, so the tracer gives up a long one sooner
+    splitting = replace(options, split_on_failure=True) if rests == "auto" and options.reach is None else options
     rounds = 0
     verified: list[float] = []  # per round, the length of the figure traced and verified
     while True:
         rounds += 1
         if options.reach is None:
-            trace = trace_figure(current, params, options, progress=progress, cache=cache)
+            trace = trace_figure(current, params, splitting, progress=progress, cache=cache)
         else:
             trace = plan_figure(current, params, options, progress=progress)
         schedule, states, report = _sampled_and_verified(trace, rel_tol)
@@ -177,27 +219,17 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
                                rests=tuple(added), rounds=rounds)
         # a planned figure is planned once: a rest changes the program, and the plan says why it failed
         if result.success or rests != "auto" or rounds > max_rounds or options.reach is not None:
-            return _finish(result, limits)
+            return _finish(_searched_in_full(result, params, rel_tol, cache, progress), limits)
         verified.append(sum(sec.section.length for sec, checks in zip(trace.sections, report.sections)
                             if sec.success and checks.get("passed", False)))
         if len(verified) > _BARREN_ROUNDS and verified[-1] <= max(verified[:-_BARREN_ROUNDS]):
             # splitting has stopped helping: each round doubles the sections to trace (a zigzag
             # read as one smooth curve took 10, 16, then 42 s a round, none of its pieces traced)
-            return _finish(replace(result, note=(
+            return _finish(replace(_searched_in_full(result, params, rel_tol, cache, progress), note=(
                 f"stopped adding rests after {rounds} rounds: the last {_BARREN_ROUNDS} traced and verified no more "
                 f"of the figure than the round before them")), limits)
-        # The replay carries each section's end state into the next, so a section may fail for an
-        # error made before it: every section of the curve up to its last failing one is split.
-        last_bad: dict[int, int] = {}
-        for k, (sec, checks) in enumerate(zip(trace.sections, report.sections)):
-            if not (sec.success and checks.get("passed", False)):
-                last_bad[sec.curve_index] = k
-        new = []
-        for k, sec in enumerate(trace.sections):
-            if k <= last_bad.get(sec.curve_index, -1):
-                piece = middle_join(sec.section)
-                if piece is not None:
-                    new.append((sec.curve_index, piece))
+        new = [(sec.curve_index, piece) for sec in _to_split(trace, report)
+               if (piece := middle_join(sec.section)) is not None]
         if not new:
             return _finish(result, limits)
         added += new

@@ -7,10 +7,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SPEED_RANGE", "TraceOptions"]
+__all__ = ["BRIEF_PLACEMENTS", "LONG_SECTION", "SHORT_SECTION", "SPEED_RANGE", "TraceOptions"]
 
 #: Accepted glide speeds (model length per time unit, or m/s).
 SPEED_RANGE = (1e-6, 1e6)
+
+# With TraceOptions.split_on_failure: where a section is given up to be split rather than searched
+# on. Logged over 136 drawings and figures traced with the launch-glide-stop manoeuvres (the SVG
+# corpus, 59 icons of nine sets, the 17 school figures, 6 generated curves; 1,977 sections,
+# 2026-11-28): of the 518 sections of more than four pieces, 13 were searched again with the
+# stops' fallbacks, which traced two (of 5 and 7 pieces; split instead, both drawings verify) and
+# spent 61 s failing on the others (2.3 to 4 s on a section of 7 pieces, 8 to 12.6 s on one of
+# 108 to 214). The 9 sections they traced in the school figures have two pieces, and are searched
+# as before. Of the 43 sections of more than 32 pieces, two needed more than 64 placements (131
+# of 141 pieces, 195 of 100); one of 214 tried all 256 in 14 s and failed.
+#: The most pieces of a section searched with the stops' full-accuracy fallbacks where the caller splits it.
+SHORT_SECTION = 4
+#: Sections of more pieces than this are searched briefly where the caller splits them ...
+LONG_SECTION = 32
+#: ... trying at most this many glide placements before one works.
+BRIEF_PLACEMENTS = 64
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -54,6 +70,13 @@ class TraceOptions:
         came at placement 132 (a section of 141 pieces); a section of hundreds of pieces (a zigzag
         read as one smooth curve) has thousands of placements, which all fail there, and would
         take minutes.
+    split_on_failure : bool
+        Whether the caller splits a section that fails with a rest at one of its smooth joins and
+        traces the halves (:func:`skatetrace.trace_and_verify` with ``rests="auto"`` sets it). A
+        section of more than :data:`SHORT_SECTION` pieces is then searched without the stops'
+        full-accuracy fallbacks, and one of more than :data:`LONG_SECTION` gives up after
+        :data:`BRIEF_PLACEMENTS` placements none of which worked: halves are traced in a fraction
+        of the time such a failure takes. The trace of a section that is not given up is the same.
     reach : float or None
         Plan the mass's motion within this distance of the contact point
         (:func:`skatetrace.plan_figure`); None keeps the launch-glide-stop manoeuvres.
@@ -98,6 +121,7 @@ class TraceOptions:
     placement: str = "least-reach"
     search: int = 16
     max_placements: int = 256
+    split_on_failure: bool = False
     reach: float | None = None
     objective: str = "effort"
     max_accel: float | None = None
@@ -140,7 +164,7 @@ class TraceOptions:
             if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))
                                       or not (math.isfinite(value) and value > 0)):
                 raise ValueError(f"{name} must be a positive finite number or None, got {value!r}")
-        for name in ("reach_hint", "all_or_nothing"):
+        for name in ("reach_hint", "all_or_nothing", "split_on_failure"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
         if self.objective not in ("effort", "time"):

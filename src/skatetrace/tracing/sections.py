@@ -35,7 +35,7 @@ from ..figures.figure import Figure, Section
 from ..figures.geometry import travel
 from ..processes import run_jobs
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
-from .options import TraceOptions
+from .options import BRIEF_PLACEMENTS, LONG_SECTION, SHORT_SECTION, TraceOptions
 from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
 from .search import search_placements
 from .shapes import ShapeIndex, exact_key
@@ -347,21 +347,28 @@ def trace_section(
     # (see solve_stop), which serve stops whose speed grazes zero before the end and cost most of
     # a long section's time where they fail. Only a section that no placement traces without
     # them is searched again with them; the placements that failed for another reason are not
-    # solved twice.
-    done = quick = search_placements(placements(), lambda placement: solved(placement, False), options, {})
-    if quick.best is None and quick.deferred:
+    # solved twice. A section that the caller splits where it fails is searched less (see
+    # TraceOptions.split_on_failure): its halves are traced faster than its failure takes.
+    brief = options.split_on_failure and len(segs) > SHORT_SECTION
+    search = (replace(options, max_placements=min(options.max_placements, BRIEF_PLACEMENTS))
+              if brief and len(segs) > LONG_SECTION else options)
+    done = quick = search_placements(placements(), lambda placement: solved(placement, False), search, {})
+    if quick.best is None and quick.deferred and not brief:
         full = search_placements(placements(), lambda placement: solved(placement, True), options,
                                  quick.settled)
         done = replace(full, nfev=quick.nfev + full.nfev)
     if done.best is not None:
         return replace(done.best, nfev=done.nfev)
     attempts, first_failure = done.attempts, done.first_failure
-    total = sum(1 for _ in placements()) if attempts >= options.max_placements else attempts
+    total = sum(1 for _ in placements()) if attempts >= search.max_placements else attempts
     tried = (f"tried {attempts} glide placements: every segment as the glide, every candidate mass position"
              if total == attempts else
              f"gave up after {attempts} of its {total:,} glide placements (the longest of its {len(segs)} pieces as "
              f"the glide first; TraceOptions.max_placements): a section this long rarely starts and stops with one "
              f"glide: split it with corners, or with rests at its smooth joins (--rests joins)")
+    if brief:
+        tried = (f"tried {attempts} of its {total:,} glide placements without the stops' full-accuracy fallbacks, "
+                 f"to be split by a rest (TraceOptions.split_on_failure)")
     return SectionTrace(
         success=False, status=first_failure.status,
         message=first_failure.message + f" ({tried})",
