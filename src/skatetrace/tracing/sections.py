@@ -304,8 +304,10 @@ def trace_section(
     well-conditioned solves alone (``fallback=False`` of :func:`~skatetrace.tracing.maneuver.solve_stop`):
     a stop that only the full-accuracy fallbacks find has its speed grazing zero before the end,
     and those fallbacks are most of a long section's time where they fail. Only where no
-    placement works without them is the search run again with them. Never raises for a section
-    that cannot be traced: the result has ``success=False`` and the reason.
+    placement works without them is the search run again with them. With
+    ``options.split_on_failure`` (the caller splits a section that fails) a section of several
+    pieces is searched less: see :class:`~skatetrace.tracing.options.TraceOptions`. Never raises for
+    a section that cannot be traced: the result has ``success=False`` and the reason.
 
     Raises
     ------
