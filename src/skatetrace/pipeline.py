@@ -151,8 +151,9 @@ def _searched_in_full(result: VerifiedTrace, params, rel_tol: float, cache: dict
     """``result`` traced and verified once more where sections of several pieces failed a search cut short
     for splitting (:attr:`TraceOptions.split_on_failure`), now that they are not split further.
 
-    Those sections are searched in full: the answer is never worse for the shorter searches of the
-    rounds before. The sections traced are taken from ``cache`` (the same traces either way).
+    Those sections are searched in full, so that none is left failed for want of the search it
+    would have had without the rests. The sections traced are taken from ``cache`` (a search cut
+    short gives the same trace where it finds one).
     """
     trace = result.trace
     if result.success or not trace.options.split_on_failure or all(
