@@ -19,8 +19,8 @@ SPEED_RANGE = (1e-6, 1e6)
 # stops' fallbacks, which traced two (of 5 and 7 pieces; split instead, both drawings verify) and
 # spent 61 s failing on the others (2.3 to 4 s on a section of 7 pieces, 8 to 12.6 s on one of
 # 108 to 214). The 9 sections they traced in the school figures have two pieces, and are searched
-# as before. Of the 43 sections of more than 32 pieces, two needed more than 64 placements (131
-# of 141 pieces, 195 of 100); one of 214 tried all 256 in 14 s and failed.
+# as before. Of the 43 sections of more than 32 pieces, two needed more than 64 placements (132
+# on a section of 141 pieces, 196 on one of 100); one of 214 tried all 256 in 14 s and failed.
 #: The most pieces of a section searched with the stops' full-accuracy fallbacks where the caller splits it.
 SHORT_SECTION = 4
 #: Sections of more pieces than this are searched briefly where the caller splits them ...
@@ -67,9 +67,10 @@ class TraceOptions:
     max_placements : int
         The most placements tried in a section before it is given up (none of them having
         worked). Of 700 sections of the SVG corpus and the school figures the latest first success
-        came at placement 132 (a section of 141 pieces); a section of hundreds of pieces (a zigzag
-        read as one smooth curve) has thousands of placements, which all fail there, and would
-        take minutes.
+        came at placement 132 (a section of 141 pieces), and of 1,977 logged with unseen icons and
+        generated curves at placement 196 (100 pieces of a handwritten curve); a section of
+        hundreds of pieces (a zigzag read as one smooth curve) has thousands of placements, which
+        all fail there, and would take minutes.
     split_on_failure : bool
         Whether the caller splits a section that fails with a rest at one of its smooth joins and
         traces the halves (:func:`skatetrace.trace_and_verify` with ``rests="auto"`` sets it). A
