@@ -11,6 +11,7 @@ from skatetrace import pipeline as rests_module
 from skatetrace.errors import FigureFormatError
 from skatetrace.figures.figure import REST, SMOOTH, Curve, Figure, Join
 from skatetrace.figures.geometry import Pose, Segment
+from skatetrace.dynamics.model import SleighParams
 from skatetrace.dynamics.presets import skater_params
 from skatetrace.pipeline import add_rests, middle_join, trace_and_verify
 from skatetrace.tracing.sections import TraceOptions
@@ -268,7 +269,7 @@ def test_a_section_that_will_be_split_is_searched_less(monkeypatch):
         return Searched(best=None, first_failure=failed, attempts=1, nfev=3, deferred=True, settled={})
 
     monkeypatch.setattr(tracing, "search_placements", failing)
-    params = _wiggle(2).params or tracing.SleighParams()
+    params = SleighParams()
     for pieces, split, wanted in ((opts.SHORT_SECTION, True, [256, 256]), (opts.SHORT_SECTION + 1, True, [256]),
                                   (opts.LONG_SECTION, True, [256]), (opts.LONG_SECTION + 1, True, [opts.BRIEF_PLACEMENTS]),
                                   (opts.LONG_SECTION + 1, False, [256, 256])):
@@ -286,7 +287,7 @@ def test_a_section_searched_less_is_traced_the_same_where_it_is_traced():
     from skatetrace.tracing import sections as tracing
 
     sec = _wiggle(40).curves[0].sections()[0]
-    params = tracing.SleighParams()
+    params = SleighParams()
     full, brief = (tracing.trace_section(params, sec, TraceOptions(split_on_failure=split, workers=1))
                    for split in (False, True))
     assert full.success and brief.success and brief.nfev == full.nfev and brief.glide == full.glide
