@@ -339,3 +339,17 @@ def test_a_section_left_failed_by_a_short_search_is_searched_in_full_when_the_re
     assert [len(s.section.pieces) for s in res.trace.sections] == [3, 3]
     flags.clear()
     assert trace_and_verify(fig, rests="never").success and flags == [False]
+
+
+def test_a_round_that_leaves_a_long_section_failed_is_not_counted_against_the_rests():
+    # A wiggle of 80 arcs: its sections of 80, 40 and 20 pieces have no stop, those of 10 trace.
+    # Two rounds in a row that verify nothing more end the rests, but not while a failed section
+    # has more than LONG_SECTION pieces (given up soon, and splitting is what traces it).
+    from skatetrace.tracing.options import LONG_SECTION
+
+    fig = _wiggle(80, curvature=2.0, length=0.5)
+    res = trace_and_verify(fig, rests="auto")
+    assert res.success and not res.note and res.rounds >= 4
+    assert max(len(s.section.pieces) for s in res.trace.sections) < LONG_SECTION
+    capped = trace_and_verify(fig, rests="auto", max_rounds=2)  # the rounds still end at max_rounds
+    assert not capped.success and capped.rounds == 4  # three rounds, then the search in full

@@ -37,6 +37,7 @@ from .dynamics.model import SleighParams
 from .figures.figure import Figure, Section
 from .planning.planner import figure_unknowns, plan_figure
 from .processes import Background
+from .tracing.options import LONG_SECTION
 from .tracing.sections import FigureTrace, TraceOptions, TraceStatus, trace_figure
 from .verification.feasibility import Feasibility, HumanLimits, assess_feasibility, exported_peaks
 from .verification.verify import VerificationReport, check_rel_tol, reporting, schedule_from_trace, verify
@@ -95,7 +96,8 @@ class VerifiedTrace:
 
 
 #: Rounds of rests in a row that verify no more of the figure than the rounds before them, after which
-#: ``rests="auto"`` stops.
+#: ``rests="auto"`` stops (a round that leaves a long section failed is not counted: see
+#: :func:`trace_and_verify`).
 _BARREN_ROUNDS = 2
 
 
@@ -177,7 +179,9 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         ``"auto"`` (default) adds a rest in the middle of each failing section (and where its
         replay strayed, of the sections before it on its curve), and tries again, at most
         ``max_rounds`` times, and no more once two rounds in a row have verified no more of the
-        figure than before them (the result's ``note`` says so). The sections are traced with
+        figure than before them (the result's ``note`` says so; a round that leaves a section of
+        more than :data:`~skatetrace.tracing.options.LONG_SECTION` pieces failed is not counted, since
+        splitting is what traces such a section). The sections are traced with
         :attr:`~skatetrace.tracing.options.TraceOptions.split_on_failure`, and where the last round
         leaves a section of several pieces failed, it is searched in full once more;
         ``"never"`` traces the figure as given; ``"joins"`` rests at every smooth join.
@@ -221,8 +225,13 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         # a planned figure is planned once: a rest changes the program, and the plan says why it failed
         if result.success or rests != "auto" or rounds > max_rounds or options.reach is not None:
             return _finish(_searched_in_full(result, params, rel_tol, cache, progress), limits)
-        verified.append(sum(sec.section.length for sec, checks in zip(trace.sections, report.sections)
-                            if sec.success and checks.get("passed", False)))
+        passed = [sec.success and checks.get("passed", False) for sec, checks in zip(trace.sections, report.sections)]
+        # A section of more pieces than LONG_SECTION that failed was given up soon, and is split
+        # (splitting is what traces a long wiggle: one of 80 arcs failed as 1, 2 and 4 sections,
+        # and verified as 8): a round that leaves one is not counted against the rests.
+        if not splitting.split_on_failure or all(ok or len(sec.section.pieces) <= LONG_SECTION
+                                       for sec, ok in zip(trace.sections, passed)):
+            verified.append(sum(sec.section.length for sec, ok in zip(trace.sections, passed) if ok))
         if len(verified) > _BARREN_ROUNDS and verified[-1] <= max(verified[:-_BARREN_ROUNDS]):
             # splitting has stopped helping: each round doubles the sections to trace (a zigzag
             # read as one smooth curve took 10, 16, then 42 s a round, none of its pieces traced)
