@@ -229,8 +229,8 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         # A section of more pieces than LONG_SECTION that failed was given up soon, and is split
         # (splitting is what traces a long wiggle: one of 80 arcs failed as 1, 2 and 4 sections,
         # and verified as 8): a round that leaves one is not counted against the rests.
-        if not splitting.split_on_failure or all(ok or len(sec.section.pieces) <= LONG_SECTION
-                                       for sec, ok in zip(trace.sections, passed)):
+        long_failed = any(not ok and len(sec.section.pieces) > LONG_SECTION for sec, ok in zip(trace.sections, passed))
+        if not (splitting.split_on_failure and long_failed):
             verified.append(sum(sec.section.length for sec, ok in zip(trace.sections, passed) if ok))
         if len(verified) > _BARREN_ROUNDS and verified[-1] <= max(verified[:-_BARREN_ROUNDS]):
             # splitting has stopped helping: each round doubles the sections to trace (a zigzag
