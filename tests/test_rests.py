@@ -299,10 +299,10 @@ def test_only_a_section_whose_replay_strayed_splits_the_sections_before_it():
         return SimpleNamespace(curve_index=curve, success=traced), {"passed": traced and passed}
 
     def split(*rows):
-        trace = SimpleNamespace(sections=[r[0] for r in rows])
-        report = SimpleNamespace(sections=[r[1] for r in rows])
-        chosen = [id(s) for s in rests_module._to_split(trace, report)]
-        return [k for k, s in enumerate(trace.sections) if id(s) in chosen]
+        sections = [r[0] for r in rows]
+        passed = [r[0].success and r[1]["passed"] for r in rows]
+        chosen = [id(s) for s in rests_module._to_split(sections, passed)]
+        return [k for k, s in enumerate(sections) if id(s) in chosen]
 
     # an untraced section has no replay: the next starts afresh, and those before it passed
     assert split(sec(0), sec(0), sec(0, traced=False), sec(0)) == [2]

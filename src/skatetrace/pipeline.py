@@ -132,9 +132,10 @@ def _all_smooth_joins(figure: Figure) -> list[tuple[int, int]]:
             if p.join_before is not None and not p.join_before.is_cusp]
 
 
-def _to_split(trace: FigureTrace, report: VerificationReport) -> list:
-    """The sections of ``trace`` that ``rests="auto"`` splits: those that failed, and every section of a
-    curve up to its last one whose replay strayed.
+def _to_split(sections, passed: list[bool]) -> list:
+    """The ``sections`` (of a trace, with whether each was traced and its replay ``passed``) that
+    ``rests="auto"`` splits: those that failed, and every section of a curve up to its last one
+    whose replay strayed.
 
     The replay carries each section's end state into the next, so a replay may stray for an
     error made before it. A section that could not be traced has no replay: the next starts
@@ -142,11 +143,11 @@ def _to_split(trace: FigureTrace, report: VerificationReport) -> list:
     before it, whose replays passed, are kept.
     """
     last_stray: dict[int, int] = {}
-    for k, (sec, checks) in enumerate(zip(trace.sections, report.sections)):
-        if sec.success and not checks.get("passed", False):
+    for k, (sec, ok) in enumerate(zip(sections, passed)):
+        if sec.success and not ok:
             last_stray[sec.curve_index] = k
-    return [sec for k, (sec, checks) in enumerate(zip(trace.sections, report.sections))
-            if not (sec.success and checks.get("passed", False)) or k <= last_stray.get(sec.curve_index, -1)]
+    return [sec for k, (sec, ok) in enumerate(zip(sections, passed))
+            if not ok or k <= last_stray.get(sec.curve_index, -1)]
 
 
 def _searched_in_full(result: VerifiedTrace, params, rel_tol: float, cache: dict, progress) -> VerifiedTrace:
@@ -238,7 +239,7 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
             return _finish(replace(_searched_in_full(result, params, rel_tol, cache, progress), note=(
                 f"stopped adding rests after {rounds} rounds: the last {_BARREN_ROUNDS} traced and verified no more "
                 f"of the figure than the round before them")), limits)
-        new = [(sec.curve_index, piece) for sec in _to_split(trace, report)
+        new = [(sec.curve_index, piece) for sec in _to_split(trace.sections, passed)
                if (piece := middle_join(sec.section)) is not None]
         if not new:
             return _finish(result, limits)
