@@ -25,6 +25,7 @@ import scipy.sparse as sps
 
 from ..processes import recording_interrupts
 from .blas import one_thread
+from .heap import padded
 from .native import native
 
 __all__ = ["SparseProgram", "ProgramResult"]
@@ -306,7 +307,7 @@ class SparseProgram:
         solver = ca.nlpsol("plan", "ipopt", nlp, opts)
         lbg = np.concatenate(self._lbg) if self._lbg else np.zeros(0)
         ubg = np.concatenate(self._ubg) if self._ubg else np.zeros(0)
-        with recording_interrupts() as caught, one_thread():  # (see skatetrace.planning.blas)
+        with recording_interrupts() as caught, one_thread(), padded():  # (see planning.blas and planning.heap)
             sol = solver(x0=self.x0, lbx=self.lbx, ubx=self.ubx, lbg=lbg, ubg=ubg)
         if caught:
             # CasADi turns Ctrl-C into a failed solve ("NonIpopt_Exception_Thrown"), and a caller
