@@ -1,4 +1,4 @@
-"""While IPOPT solves, glibc's heap keeps a pad beyond its top, so freed workspace is not faulted in again; settings restored after."""
+"""While IPOPT solves, glibc's heap keeps a pad beyond its top, so freed workspace is not faulted in again."""
 
 import contextlib
 import platform

@@ -66,7 +66,18 @@ def library() -> ctypes.CDLL | None:
 
 @contextlib.contextmanager
 def padded(pad: int = PAD):
-    """Within the ``with`` block, glibc's heap keeps ``pad`` bytes beyond its top; afterwards its default, trimmed."""
+    """Within the ``with`` block, glibc's heap keeps ``pad`` bytes beyond its top; afterwards its default, trimmed.
+
+    Parameters
+    ----------
+    pad : int
+        Bytes of address space (:data:`PAD`, 1 GiB, by default); ``mallopt`` takes an ``int``.
+
+    Raises
+    ------
+    ValueError
+        If ``pad`` is not a whole number of bytes in ``[0, 2**31)``.
+    """
     if not isinstance(pad, int) or isinstance(pad, bool) or not 0 <= pad < 1 << 31:
         raise ValueError(f"pad must be a whole number of bytes in [0, 2**31), got {pad!r}")
     libc = library()
