@@ -33,6 +33,27 @@ def forking(monkeypatch):
 
 
 @pytest.fixture
+def small_program():
+    """A function that solves a program of two unknowns with IPOPT (its optimum ``(1, -2)``) and returns its solution.
+
+    For the tests of what surrounds every solve (:mod:`skatetrace.planning.blas`, :mod:`skatetrace.planning.heap`).
+    """
+    import numpy as np
+
+    from skatetrace.planning.nlp import SparseProgram
+
+    def solve() -> np.ndarray:
+        prog = SparseProgram(2)
+        prog.minimize((prog.x[0] - 1.0) ** 2 + (prog.x[1] + 2.0) ** 2)
+        prog.constrain(prog.x[0] + prog.x[1], -5.0, 5.0)
+        res = prog.solve({"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"})
+        assert res.success
+        return res.x
+
+    return solve
+
+
+@pytest.fixture
 def pools_made(monkeypatch):
     """The worker counts of the process pools :mod:`skatetrace.processes` starts, forking allowed
     whatever else runs in the test process: a test of side-by-side work asserts the pool was used."""

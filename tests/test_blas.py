@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from skatetrace.planning import blas
-from skatetrace.planning.nlp import SparseProgram
 
 CASADI = Path(ca.__file__).resolve().parent
 SHIPPED = any("openblas" in p.name for p in CASADI.iterdir())
@@ -47,18 +46,9 @@ def test_the_soname_is_preferred_over_the_copies(tmp_path):
     assert names == ["libcasadi-tp-openblas.so.0", "libcasadi-tp-openblas.so"]
 
 
-def _solve_a_small_program() -> np.ndarray:
-    prog = SparseProgram(2)
-    prog.minimize((prog.x[0] - 1.0) ** 2 + (prog.x[1] + 2.0) ** 2)
-    prog.constrain(prog.x[0] + prog.x[1], -5.0, 5.0)
-    res = prog.solve({"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"})
-    assert res.success
-    return res.x
-
-
-def test_a_program_is_solved_where_there_is_no_library(monkeypatch):
+def test_a_program_is_solved_where_there_is_no_library(monkeypatch, small_program):
     monkeypatch.setattr(blas, "library", lambda: None)
-    np.testing.assert_allclose(_solve_a_small_program(), [1.0, -2.0], atol=1e-6)
+    np.testing.assert_allclose(small_program(), [1.0, -2.0], atol=1e-6)
 
 
 _ONE_INSTANCE = """
@@ -92,8 +82,8 @@ def test_the_instance_held_is_the_one_ipopt_runs_on(order):
 
 
 @needs_lib
-def test_a_solve_leaves_the_thread_count_as_it_found_it():
+def test_a_solve_leaves_the_thread_count_as_it_found_it(small_program):
     lib = blas.library()
     before = lib.openblas_get_num_threads()
-    np.testing.assert_allclose(_solve_a_small_program(), [1.0, -2.0], atol=1e-6)
+    np.testing.assert_allclose(small_program(), [1.0, -2.0], atol=1e-6)
     assert lib.openblas_get_num_threads() == before

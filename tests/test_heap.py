@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from skatetrace.planning import heap
-from skatetrace.planning.nlp import SparseProgram
 
 GLIBC = sys.platform.startswith("linux") and platform.libc_ver()[0] == "glibc"
 needs_glibc = pytest.mark.skipif(not GLIBC, reason="the pad is glibc's (mallopt)")
@@ -62,24 +61,15 @@ def test_a_pad_that_is_not_a_number_of_bytes_mallopt_takes_is_refused(pad):
             pass
 
 
-def _solve_a_small_program() -> np.ndarray:
-    prog = SparseProgram(2)
-    prog.minimize((prog.x[0] - 1.0) ** 2 + (prog.x[1] + 2.0) ** 2)
-    prog.constrain(prog.x[0] * prog.x[1], -5.0, 5.0)
-    res = prog.solve({"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"})
-    assert res.success
-    return res.x
-
-
-def test_a_program_is_solved_where_the_c_library_is_not_glibc(monkeypatch):
+def test_a_program_is_solved_where_the_c_library_is_not_glibc(monkeypatch, small_program):
     monkeypatch.setattr(heap, "library", lambda: None)
-    np.testing.assert_allclose(_solve_a_small_program(), [1.0, -2.0], atol=1e-6)
+    np.testing.assert_allclose(small_program(), [1.0, -2.0], atol=1e-6)
 
 
-def test_the_pad_changes_no_digit_of_a_solve(monkeypatch):
-    padded = _solve_a_small_program()
+def test_the_pad_changes_no_digit_of_a_solve(monkeypatch, small_program):
+    padded = small_program()
     monkeypatch.setattr("skatetrace.planning.nlp.padded", contextlib.nullcontext)
-    assert np.array_equal(padded, _solve_a_small_program())
+    assert np.array_equal(padded, small_program())
 
 
 # Six workspaces of 64 MiB, each written through and freed, as MUMPS does at every factorisation.
