@@ -363,14 +363,15 @@ def trace_section(
         return replace(done.best, nfev=done.nfev)
     attempts, first_failure = done.attempts, done.first_failure
     total = sum(1 for _ in placements()) if attempts >= search.max_placements else attempts
-    tried = (f"tried {attempts} glide placements: every segment as the glide, every candidate mass position"
-             if total == attempts else
-             f"gave up after {attempts} of its {total:,} glide placements (the longest of its {len(segs)} pieces as "
-             f"the glide first; TraceOptions.max_placements): a section this long rarely starts and stops with one "
-             f"glide: split it with corners, or with rests at its smooth joins (--rests joins)")
     if brief:
         tried = (f"tried {attempts} of its {total:,} glide placements without the stops' full-accuracy fallbacks, "
                  f"to be split by a rest (TraceOptions.split_on_failure)")
+    elif total == attempts:
+        tried = f"tried {attempts} glide placements: every segment as the glide, every candidate mass position"
+    else:
+        tried = (f"gave up after {attempts} of its {total:,} glide placements (the longest of its {len(segs)} pieces "
+                 f"as the glide first; TraceOptions.max_placements): a section this long rarely starts and stops with "
+                 f"one glide: split it with corners, or with rests at its smooth joins (--rests joins)")
     return SectionTrace(
         success=False, status=first_failure.status,
         message=first_failure.message + f" ({tried})",
