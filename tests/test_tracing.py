@@ -529,19 +529,22 @@ def test_a_placement_whose_stop_needs_the_fallbacks_gives_way_to_one_that_does_n
 
 
 def _recording_solves(monkeypatch):
-    """Record each placement's manoeuvres: (legs before and after, apex, fallback, stop found, deferred)."""
+    """Record each placement's manoeuvres: (its stop's legs and apex, fallback, stop found, deferred)."""
     from skatetrace.tracing import sections
 
     solves = []
-    real = sections._maneuvers
+    real = sections.solve_stop
 
-    def recorded(params, before, after, glide_ab, kw):
-        stop, launch = real(params, before, after, glide_ab, kw)
-        deferred = stop.deferred or bool(launch and launch.deferred)
-        solves.append(((len(before), len(after), glide_ab), kw["fallback"], stop.success, deferred))
-        return stop, launch
+    def recorded(params, legs, glide_ab, speed, **kw):
+        sol = real(params, legs, glide_ab, speed, **kw)
+        if kw.get("backward"):  # the launch of the placement whose stop was found last
+            place, fallback, found, deferred = solves[-1]
+            solves[-1] = (place, fallback, found, deferred or sol.deferred)
+        else:
+            solves.append(((tuple(legs), tuple(glide_ab)), kw["fallback"], sol.success, sol.deferred))
+        return sol
 
-    monkeypatch.setattr(sections, "_maneuvers", recorded)
+    monkeypatch.setattr(sections, "solve_stop", recorded)
     return solves
 
 
@@ -584,7 +587,7 @@ def test_a_section_nothing_traces_solves_each_placement_once_with_the_fallbacks(
 def test_the_search_keeps_the_failures_it_need_not_solve_again_without_their_controls():
     # search_placements on stand-in traces: the deferred failures are said and not kept, the others
     # kept (without their controls) and taken from there by a second search, which solves the rest
-    from skatetrace.tracing.search import search_placements
+    from skatetrace.tracing.search import Attempt, search_placements
     from skatetrace.tracing.sections import SectionTrace
 
     sec = _single(Segment(1.0, 1.0)).curves[0].sections()[0]
@@ -599,10 +602,10 @@ def test_the_search_keeps_the_failures_it_need_not_solve_again_without_their_con
     outcome = {0: (False, True), 1: (False, False), 2: (False, True), 3: (False, False)}  # (works, deferred)
     solved = []
 
-    def solve(p):
+    def solve(p, bound):
         solved.append(p[4][1])
         works, deferred = outcome[int(p[4][1])]
-        return trace(works, reach=5.0), 10, deferred  # farther than every apex: none is pruned
+        return Attempt(trace(works, reach=5.0), 10, deferred)  # farther than every apex: none is pruned
 
     opts = TraceOptions(workers=1)
     first = search_placements(iter(placements), solve, opts, {})
@@ -635,3 +638,66 @@ def test_section_peaks_resolve_the_spikes_where_the_blade_comes_to_rest():
                             ("max_abs_b", "b")):
             assert sec.metrics[metric] == pytest.approx(np.max(np.abs(v[key])), rel=1e-3), metric
         assert 0.0 < sec.metrics["min_speed_inside"]
+
+
+def test_a_placement_whose_stop_reaches_farther_than_the_best_is_not_launched(monkeypatch):
+    # An arc of bench/_common.py's distinct_arcs(40) (number 14): its first placement, the glide at
+    # (0, 0), works; the next, an instant apex at (a, 0), stops with the mass 5.7 from the blade,
+    # farther than the first's whole section (3.5). Its launch is not solved: the same trace, with
+    # fewer integrations (measured 33 against 58).
+    from skatetrace.tracing import maneuver
+    from skatetrace.tracing import sections as tracing
+
+    sec = _single(Segment(-1.698759465776116, 0.7263077763314891)).curves[0].sections()[0]
+    real, launches = maneuver.solve_stop, []
+
+    def counted(*args, **kw):
+        launches.append(kw.get("backward", False))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(tracing, "solve_stop", counted)
+    pruned = tracing.trace_section(P, sec, TraceOptions(workers=1))
+    pruned_launches, launches[:] = sum(launches), []
+    monkeypatch.setattr(tracing, "_stop_reach", lambda stop: math.nan)  # no stop tells: every placement launched
+    full = tracing.trace_section(P, sec, TraceOptions(workers=1))
+    assert pruned.success and full.success
+    assert (pruned.glide, pruned.metrics, pruned.residuals) == (full.glide, full.metrics, full.residuals)
+    assert pruned_launches < sum(launches) and pruned.nfev < full.nfev
+    t = np.linspace(0.0, full.duration, 101)
+    for key in ("a", "b", "xi2"):
+        np.testing.assert_array_equal(pruned.evaluate(t, geometry=False)[key], full.evaluate(t, geometry=False)[key])
+
+
+def test_the_search_counts_a_stop_that_outreaches_the_best_alike_in_a_batch_and_one_by_one():
+    # Stand-in attempts: placement 1 beats 0; placement 2's stop reaches farther than 1's section but
+    # not than 0's. One by one, 2 is given up after its stop (bound 1's reach); solved in a batch
+    # beside 1 (bound 0's reach), it is launched, and counted as its stop alone all the same.
+    from skatetrace.tracing.search import Attempt, search_placements
+    from skatetrace.tracing.sections import SectionTrace
+
+    sec = _single(Segment(1.0, 1.0)).curves[0].sections()[0]
+
+    def trace(reach):
+        return SectionTrace(success=True, status=TraceStatus.SUCCESS, message="ok", curve_index=0, section=sec,
+                            params=P, speed=1.0, glide={}, phases=("controls",),
+                            metrics={"max_abs_a": reach, "max_abs_b": 0.0, "peak_mass_kinetic_energy": 1.0})
+
+    placements = [(0, 0.0, 1.0, 0.1, (0.0, 0.0), True) for _ in range(4)]
+    stops, reaches = [2.0, 1.0, 3.0, 1.5], [5.0, 2.0, 3.5, 2.5]  # the stops' reaches, the sections'
+    bounds = []
+
+    def solve(bounded, p, bound):
+        k = len(bounds)
+        bounds.append(bound)
+        if bounded and stops[k] > bound * (1.0 + 1e-9):
+            return Attempt(None, 4, False, stops[k], 4)
+        return Attempt(trace(reaches[k]), 10, False, stops[k], 4)
+
+    opts = TraceOptions(workers=1)
+    one_by_one = search_placements(iter(placements), lambda p, bound: solve(True, p, bound), opts, {})
+    assert bounds == [math.inf, 5.0, 2.0, 2.0]
+    bounds.clear()
+    batched = search_placements(iter(placements), lambda p, bound: solve(False, p, bound), opts, {})
+    for done in (one_by_one, batched):
+        assert done.best.metrics["max_abs_a"] == 2.0 and done.attempts == 4
+        assert done.nfev == 10 + 10 + 4 + 10  # placement 2 counted as its stop alone

@@ -37,7 +37,7 @@ from ..processes import run_jobs
 from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
 from .options import BRIEF_PLACEMENTS, LONG_SECTION, SHORT_SECTION, TraceOptions
 from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
-from .search import search_placements
+from .search import Attempt, outreaches, search_placements
 from .shapes import ShapeIndex, exact_key
 
 __all__ = ["TraceOptions", "TraceStatus", "SectionTrace", "FigureTrace", "trace_section", "trace_figure"]
@@ -331,19 +331,28 @@ def trace_section(
             for glide_ab, steady in glide_candidates(params, segs, g, ell, options):
                 yield g, kg, Lg, ell, glide_ab, steady
 
-    def solved(placement, fallback: bool) -> tuple[SectionTrace, int, bool]:
-        """The section traced with the glide at ``placement``, the integrations that took, and
-        whether it failed for want of the stops' full-accuracy fallbacks (``fallback=False``)."""
+    def solved(placement, fallback: bool, bound: float) -> Attempt:
+        """The section traced with the glide at ``placement`` (or its stop alone, where that reaches
+        beyond ``bound``: see :class:`~skatetrace.tracing.search.Attempt`)."""
         g, kg, Lg, ell, glide_ab, steady = placement
         # an instant apex is no glide: the launch and the stop share the whole segment
         ell_g = ell if steady else 0.5 * Lg
         before, after = legs_from_apex(segs, g, ell_g)
         glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
                  "kappa": kg, "speed": options.speed}
-        stop, launch = _maneuvers(params, before, after, glide_ab, dict(kw, fallback=fallback))
-        used = stop.nfev + (launch.nfev if launch else 0)
+        kwf = dict(kw, fallback=fallback)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            stop = solve_stop(params, after, glide_ab, 1.0, **kwf)
+            if not stop.success:
+                trace = _assemble(params, section, options, curve_index, glide, before, stop, None, stop.nfev)
+                return Attempt(trace, stop.nfev, stop.deferred)
+            reach = _stop_reach(stop)
+            if outreaches(reach, bound):  # this section cannot win: its launch is not solved
+                return Attempt(None, stop.nfev, False, reach, stop.nfev)
+            launch = _launch(params, before, after, glide_ab, stop, kwf)
+        used = stop.nfev + launch.nfev
         trace = _assemble(params, section, options, curve_index, glide, before, stop, launch, used)
-        return trace, used, not trace.success and (stop.deferred or (launch is not None and launch.deferred))
+        return Attempt(trace, used, not trace.success and (stop.deferred or launch.deferred), reach, stop.nfev)
 
     # Well-conditioned placements first: every placement is solved without the stops' fallbacks
     # (see solve_stop), which serve stops whose speed grazes zero before the end and cost most of
@@ -354,9 +363,10 @@ def trace_section(
     brief = options.split_on_failure and len(segs) > SHORT_SECTION
     search = (replace(options, max_placements=min(options.max_placements, BRIEF_PLACEMENTS))
               if brief and len(segs) > LONG_SECTION else options)
-    done = quick = search_placements(placements(), lambda placement: solved(placement, False), search, {})
+    done = quick = search_placements(placements(), lambda placement, bound: solved(placement, False, bound), search,
+                                     {})
     if quick.best is None and quick.deferred and not brief:
-        full = search_placements(placements(), lambda placement: solved(placement, True), options,
+        full = search_placements(placements(), lambda placement, bound: solved(placement, True, bound), options,
                                  quick.settled)
         done = replace(full, nfev=quick.nfev + full.nfev)
     if done.best is not None:
@@ -380,20 +390,16 @@ def trace_section(
     )  # no phases: controls that failed a check are not handed on to be written or replayed
 
 
-def _maneuvers(params: SleighParams, before, after, glide_ab, kw) -> tuple[ManeuverSolution, ManeuverSolution | None]:
-    """The stop from the apex ``glide_ab`` over ``after`` and, if it is found, the launch over ``before``.
+def _launch(params: SleighParams, before, after, glide_ab, stop: ManeuverSolution, kw) -> ManeuverSolution:
+    """The launch over ``before`` to the apex ``glide_ab`` whose stop over ``after`` is ``stop`` (found).
 
     With the mass at ``a = 0`` and the same curve on both sides of the apex the launch is the
     stop reversed in time (:func:`~skatetrace.tracing.maneuver.mirrored_maneuver`), exactly: it is not
     solved a second time.
     """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        stop = solve_stop(params, after, glide_ab, 1.0, **kw)
-        if not stop.success:
-            return stop, None
-        if glide_ab[0] == 0.0 and same_legs(before, after):
-            return stop, mirrored_maneuver(stop, before)
-        return stop, solve_stop(params, before, glide_ab, 1.0, backward=True, **kw)
+    if glide_ab[0] == 0.0 and same_legs(before, after):
+        return mirrored_maneuver(stop, before)
+    return solve_stop(params, before, glide_ab, 1.0, backward=True, **kw)
 
 
 def _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev) -> SectionTrace:
@@ -439,6 +445,25 @@ def _assemble(params, section, options, curve_index, glide, before, stop, launch
 _STEP_FRACTIONS = np.linspace(0.0, 1.0, 9)
 
 
+def _step_times(leg) -> np.ndarray:
+    """The local times of ``leg`` (of a manoeuvre) where a section's peaks are looked for: :data:`_STEP_FRACTIONS`
+    of each integration step."""
+    sol = leg.sol
+    return np.clip((sol.t_old[:, None] + sol.h[:, None] * _STEP_FRACTIONS).ravel(), min(leg.t0, leg.t1),
+                   max(leg.t0, leg.t1))
+
+
+def _stop_reach(stop: ManeuverSolution) -> float:
+    """The largest ``|a|, |b|`` of the mass where the stop's integration steps begin.
+
+    Those states are among its section's own samples (:data:`_STEP_FRACTIONS` begins at 0, where
+    the dense output is the step's initial state exactly), but for a time that rounds to another's
+    in the section, whose state is the same to rounding: no section through this stop reaches
+    less, beyond that rounding (:func:`~skatetrace.tracing.search.outreaches`).
+    """
+    return max(float(np.max(np.abs(leg.sol.y_old[:, 2:4]))) for leg in stop.legs)
+
+
 def _step_samples(trace: SectionTrace) -> dict[str, np.ndarray]:
     """The motion of a launch-glide-stop section where its peaks are, in time order, without positions or layout.
 
@@ -460,9 +485,7 @@ def _step_samples(trace: SectionTrace) -> dict[str, np.ndarray]:
             rows.append(np.array([[p1, p1], [p2, p2], [a, a], [b, b], [0.0, 0.0], [0.0, 0.0]]))
             continue
         for leg in man.legs:
-            sol = leg.sol
-            tl = np.clip((sol.t_old[:, None] + sol.h[:, None] * _STEP_FRACTIONS).ravel(),
-                         min(leg.t0, leg.t1), max(leg.t0, leg.t1))
+            tl = _step_times(leg)
             y, adot, bdot = _leg_motion(params, man, leg, tl)
             times.append(trace._section_time(ph, tl))
             rows.append(np.vstack([y[:4], adot, bdot]))
