@@ -313,6 +313,32 @@ def test_the_shape_index_compares_lengths_and_turning_within_its_tolerance():
     assert ShapeIndex([first]).find(key((0.5, 2.0), (0.0, 1.0 + 1e-13))) is first
 
 
+def test_the_shape_index_finds_a_shape_across_the_edge_of_its_length_buckets():
+    # Keys are kept in buckets of their section's length: two lengths within the tolerance on both
+    # sides of a bucket's edge are one shape, and the first known is found, whichever bucket it is in.
+    from skatetrace.tracing import shapes
+
+    def key(length, kappa=0.0):
+        fig = Figure("k", (Curve((Segment(kappa, length),), ()),))
+        return shapes.exact_key(P, fig.curves[0].sections()[0], TraceOptions())
+
+    edge = math.exp(123457 * shapes._BUCKET)
+    below, above = key(edge * (1 - 2e-10)), key(edge * (1 + 2e-10))
+    assert shapes._bucket(shapes._terms(below)) != shapes._bucket(shapes._terms(above))
+    for first, second in ((below, above), (above, below)):
+        index = shapes.ShapeIndex()
+        other = key(edge * (1 - 2e-10), kappa=1.0)  # the same length, another shape
+        assert index.find(other) is other and index.find(first) is first
+        assert index.find(second) is first
+    known = key(edge * (1 + 2e-10))  # known beforehand, then found from the bucket below
+    assert shapes.ShapeIndex([known]).find(key(edge * (1 - 3e-10))) is known
+    # two known shapes (1.2e-9 apart) on either side of the edge, both within the tolerance of a
+    # third: the one known first is its shape, not the one in the bucket looked at first
+    later, earlier = key(edge * (1 - 6e-10)), key(edge * (1 + 6e-10))
+    assert shapes._bucket(shapes._terms(later)) < shapes._bucket(shapes._terms(earlier))
+    assert shapes.ShapeIndex([earlier, later]).find(key(edge)) is earlier
+
+
 # --------------------------------------------------------------------------------------------------
 # issue 6: the shortcuts of the placement search change no choice
 # --------------------------------------------------------------------------------------------------
@@ -448,6 +474,36 @@ def test_after_a_long_first_section_the_others_go_to_the_pool(monkeypatch, slow)
         assert here == sections_in_order[:1] and pooled == sections_in_order[1:]
     else:
         assert here == sections_in_order and pooled == []
+
+
+def test_sections_go_to_the_pool_after_the_first_where_the_rest_would_take_longer_than_a_pool_costs(monkeypatch):
+    """Twelve sections of 0.03 s or more each: after the first, the other eleven would take 0.33 s
+    here, more than a pool costs (0.2 s here), and they go to the pool at once, not after 0.2 s."""
+    import time
+
+    from skatetrace.tracing import sections
+
+    segs = [Segment(1.0 / (1.5 + 0.1 * i), 1.0 + 0.1 * i) for i in range(12)]
+    fig = Figure("twelve", (Curve(tuple(segs), tuple(Join("cusp") for _ in segs[1:]), name="twelve"),))
+    pooled, here = [], []
+    real_job = sections._trace_job
+
+    def job(j):
+        time.sleep(0.03)
+        here.append(j[1])
+        return real_job(j)
+
+    def run_jobs(fn, jobs, workers, chunk=1):
+        pooled.extend(j[1] for j in jobs)
+        return (real_job(j) for j in jobs)
+
+    monkeypatch.setattr(sections, "_POOL_WORTH", 0.2)
+    monkeypatch.setattr(sections, "_trace_job", job)
+    monkeypatch.setattr(sections, "run_jobs", run_jobs)
+    tr = trace_figure(fig, P, TraceOptions(workers=2))
+    assert tr.success
+    sections_in_order = [s.section for s in tr.sections]
+    assert here == sections_in_order[:1] and pooled == sections_in_order[1:]
 
 
 @pytest.mark.parametrize("pieces, here, pooled", [

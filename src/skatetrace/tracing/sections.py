@@ -618,7 +618,8 @@ def trace_figure(figure: Figure, params: SleighParams | None = None, options: Tr
 
 
 #: A pool of worker processes costs some tens of milliseconds to start and to hand the sections
-#: over: sections are traced here until they have taken this long (seconds), the rest in a pool.
+#: over: sections are traced here while they, and the rest at the pace so far, take at most this
+#: long (seconds); the rest in a pool.
 _POOL_WORTH = 0.05
 #: The most sections handed to a worker at a time (:func:`skatetrace.processes.run_jobs`).
 _CHUNK = 16
@@ -642,8 +643,9 @@ def _solve_sections(jobs: list, workers: int | None):
     was fifteenth of 21); but a section of more pieces than all the others together is traced here
     first, where its glide-placement search goes on side by side (:func:`trace_section`;
     nanosvg-drawing's section of 141 pieces, 5 s here against 8 s in a worker). Else sections are
-    traced here until they have taken ``_POOL_WORTH`` seconds (a figure of a few distinct sections
-    is done by then; after a first that took longer, none), and the rest in worker processes.
+    traced here while they have taken at most ``_POOL_WORTH`` seconds and the rest would, at the
+    pace of those traced so far (a figure of a few distinct sections is done here; of a thousand
+    arcs, only the first), and the rest in worker processes.
     Each section is traced by the same code either way: the traces do not depend on ``workers``
     or on the order.
     """
@@ -666,7 +668,10 @@ def _solve_sections(jobs: list, workers: int | None):
         return
     started = time.perf_counter()
     here = 0
-    while here < len(jobs) and (here == 0 or time.perf_counter() - started <= _POOL_WORTH):
+    while here < len(jobs):
+        taken = time.perf_counter() - started
+        if here and (taken > _POOL_WORTH or taken / here * (len(jobs) - here) > _POOL_WORTH):
+            break
         yield _trace_job(jobs[here])
         here += 1
     rest = jobs[here:]
