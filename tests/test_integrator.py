@@ -336,7 +336,9 @@ def test_final_state_is_where_integrate_legs_ends(t_end, stop):
 def test_dense_evaluation_is_scipys_formula_bit_for_bit():
     res = integrate_legs(P, _glide(1.0), [1.0], [math.inf], 0.7, -3.0, rtol=RTOL, atol=ATOL, dense=True)
     sol = res.legs[0]
-    t = np.linspace(-3.1, 0.1, 1001)  # past both ends too: extrapolated from the nearest step
+    # past both ends too (extrapolated from the nearest step), and on every step's two ends (each on
+    # the step it starts), the steps of a launch's leg running backwards in time
+    t = np.concatenate([np.linspace(-3.1, 0.1, 1001), sol._ends, sol.t_old + sol.h])
     # scipy's Dop853DenseOutput, vectorised over the points
     i = np.clip(np.searchsorted(sol._ends, t, side="right") - 1, 0, sol._ends.size - 1)
     x = ((t - sol.t_old[i]) / sol.h[i])[:, None]
@@ -348,6 +350,7 @@ def test_dense_evaluation_is_scipys_formula_bit_for_bit():
     ref += sol.y_old[i]
     assert np.array_equal(sol(t), ref.T)
     assert np.array_equal(sol(t[17]), ref[17])
+    assert np.isnan(sol(np.nan)).all()
 
 
 def test_load_leaves_the_integrator_compiled():
