@@ -208,6 +208,23 @@ def test_evaluate_refuses_times_outside_the_section():
     assert sec.evaluate([sec.duration])["xi2"][0] == pytest.approx(0.0, abs=1e-12)
 
 
+def test_evaluate_gives_each_time_its_state_whatever_the_order_of_the_times():
+    # Times in order are shared out to the phases and legs by bisection, others through their
+    # order: every time gets, bit for bit, what it gets alone, on either side of the breakpoints.
+    fig = Figure("s", (Curve((Segment(1 / 1.5, 2.0), Segment(0.0, 1.0), Segment(-1 / 2.5, 2.5)),
+                             (Join("smooth"), Join("smooth")), name="s"),))
+    sec = trace_figure(fig, P, TraceOptions(workers=1)).sections[0]
+    assert len(sec.phases) == 3 and sum(len(ph.maneuver.legs) for ph in sec.phases if ph.maneuver) >= 3
+    t = np.concatenate([np.linspace(0.0, sec.duration, 201), sec.breakpoints()])
+    order = np.random.default_rng(5).permutation(t.size)
+    for side in ("left", "right"):
+        alone = [sec.evaluate([ti], side=side) for ti in t]
+        for pick in (np.argsort(t, kind="stable"), np.arange(t.size), order, order[::-1]):
+            got = sec.evaluate(t[pick], side=side)
+            for key, values in got.items():
+                np.testing.assert_array_equal(values, np.array([alone[i][key][0] for i in pick]), err_msg=key)
+
+
 @pytest.mark.parametrize("seg", [Segment(0.1, 0.349), Segment(0.0, 0.01)])
 def test_gentle_arcs_and_tiny_lines(seg):
     """A gently curved short arc (a stop from a = 0 would need the mass ~2/k away) and a 1 cm line."""

@@ -76,6 +76,52 @@ def _leg_motion(params: SleighParams, man: ManeuverSolution, leg, t) -> tuple[np
     return y, adot, bdot
 
 
+def _by_phase(tn: np.ndarray, phases, right: bool, end: float) -> list:
+    """For each phase, what selects its times among ``tn`` (section times at unit speed), or None where none is its.
+
+    On the right a phase has the times from its start to before its end (the last one its end too,
+    and to a few ulps past it); on the left from after its start (the first one its start too)
+    to its end. The times are put in order once (sampling asks for them in a few ordered runs),
+    and each phase's found by bisection: a slice of them, or their indices. A mask over all the
+    times per phase took a quarter of the evaluation of a planned section of 69 phases at 58,000
+    times.
+    """
+    order = None if tn.size < 2 or np.all(tn[1:] >= tn[:-1]) else np.argsort(tn, kind="stable")
+    ts = tn if order is None else tn[order]
+    out, n = [], len(phases)
+    for i, ph in enumerate(phases):
+        if right:
+            lo = np.searchsorted(ts, ph.t0, "left")
+            hi = np.searchsorted(ts, end * (1 + 1e-14), "right") if i == n - 1 else np.searchsorted(ts, ph.t1, "left")
+        else:
+            lo = np.searchsorted(ts, ph.t0, "right")
+            if i == 0:
+                lo = min(lo, np.searchsorted(ts, 0.0, "left"))
+            hi = np.searchsorted(ts, ph.t1, "right")
+        if lo >= hi:
+            out.append(None)
+        else:
+            out.append(slice(int(lo), int(hi)) if order is None else order[lo:hi])
+    return out
+
+
+def _by_leg(which: np.ndarray, count: int):
+    """``(j, where)`` for each leg ``j`` of ``count`` that ``which`` names, ``where`` selecting its entries in order.
+
+    Times in order (what sampling asks for) fall on the legs in order: each leg's entries are then
+    a slice, cheaper to read and write than a mask over all of them (a planned section of 70 legs
+    sampled at 58,000 times spent half its evaluation masking).
+    """
+    if which.size and np.all(which[1:] >= which[:-1]):
+        bounds = np.searchsorted(which, np.arange(count + 1))
+        for j in range(count):
+            if bounds[j] < bounds[j + 1]:
+                yield j, slice(int(bounds[j]), int(bounds[j + 1]))
+        return
+    for j in np.unique(which):
+        yield int(j), which == j
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class SectionTrace:
     """Controls that trace one section exactly, with the solver's report.
@@ -154,13 +200,8 @@ class SectionTrace:
         # s is only known to the integration's accuracy.
         g = self.glide["segment"]
         seg = np.empty(n, dtype=int)
-        for i, ph in enumerate(self.phases):
-            first, last = i == 0, i == len(self.phases) - 1
-            if right:
-                sel = (tn >= ph.t0) & ((tn < ph.t1) | (last & (tn <= end * (1 + 1e-14))))
-            else:
-                sel = ((tn > ph.t0) | (first & (tn >= 0.0))) & (tn <= ph.t1)
-            if not np.any(sel):
+        for ph, sel in zip(self.phases, _by_phase(tn, self.phases, right, end)):
+            if sel is None:
                 continue
             if ph.kind == "glide":
                 a, b = self.glide["a"], self.glide["b"]
@@ -192,8 +233,8 @@ class SectionTrace:
             else:
                 which = np.searchsorted(his, tl - eps, side="left")
             which = np.clip(which, 0, len(legs) - 1)
-            for j in np.unique(which):
-                leg, m = legs[j], which == j
+            for j, m in _by_leg(which, len(legs)):
+                leg = legs[j]
                 tj = np.clip(tl[m], los[j], his[j])
                 y, ad, bd = _leg_motion(self.params, man, leg, tj)
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
