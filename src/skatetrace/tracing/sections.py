@@ -105,23 +105,6 @@ def _by_phase(tn: np.ndarray, phases, right: bool, end: float) -> list:
     return out
 
 
-def _by_leg(which: np.ndarray, count: int):
-    """``(j, where)`` for each leg ``j`` of ``count`` that ``which`` names, ``where`` selecting its entries in order.
-
-    Times in order (what sampling asks for) fall on the legs in order: each leg's entries are then
-    a slice, cheaper to read and write than a mask over all of them (a planned section of 70 legs
-    sampled at 58,000 times spent half its evaluation masking).
-    """
-    if which.size and np.all(which[1:] >= which[:-1]):
-        bounds = np.searchsorted(which, np.arange(count + 1))
-        for j in range(count):
-            if bounds[j] < bounds[j + 1]:
-                yield j, slice(int(bounds[j]), int(bounds[j + 1]))
-        return
-    for j in np.unique(which):
-        yield int(j), which == j
-
-
 @dataclass(frozen=True, slots=True, kw_only=True)
 class SectionTrace:
     """Controls that trace one section exactly, with the solver's report.
@@ -233,8 +216,8 @@ class SectionTrace:
             else:
                 which = np.searchsorted(his, tl - eps, side="left")
             which = np.clip(which, 0, len(legs) - 1)
-            for j, m in _by_leg(which, len(legs)):
-                leg = legs[j]
+            for j in np.unique(which):
+                leg, m = legs[j], which == j
                 tj = np.clip(tl[m], los[j], his[j])
                 y, ad, bd = _leg_motion(self.params, man, leg, tj)
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
