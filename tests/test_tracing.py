@@ -451,6 +451,31 @@ def test_sections_traced_in_worker_processes_are_the_ones_traced_here(monkeypatc
     assert pooled.sections[4].glide == pooled.sections[0].glide
 
 
+def _pool_recorded(monkeypatch, wait):
+    """The sections traced here and those handed to the pool (in order), a pool costing 0.2 s.
+
+    ``wait(here)`` runs before each section traced here (``here``: those traced so far).
+    """
+    from skatetrace.tracing import sections
+
+    here, pooled = [], []
+    real_job = sections._trace_job
+
+    def job(j):
+        wait(here)
+        here.append(j[1])
+        return real_job(j)
+
+    def run_jobs(fn, jobs, workers, chunk=1):
+        pooled.extend(j[1] for j in jobs)
+        return (real_job(j) for j in jobs)
+
+    monkeypatch.setattr(sections, "_POOL_WORTH", 0.2)
+    monkeypatch.setattr(sections, "_trace_job", job)
+    monkeypatch.setattr(sections, "run_jobs", run_jobs)
+    return here, pooled
+
+
 @pytest.mark.parametrize("slow", ["first section", "loading the integrator"])
 def test_after_a_long_first_section_the_others_go_to_the_pool(monkeypatch, slow):
     """The pool's threshold counts the sections' own time: a first section that takes longer sends
@@ -462,28 +487,16 @@ def test_after_a_long_first_section_the_others_go_to_the_pool(monkeypatch, slow)
 
     segs = [Segment(1.0 / r, 1.0 + 0.3 * i) for i, r in enumerate((1.5, 2.0, -2.5, 3.0))]
     fig = Figure("four", (Curve(tuple(segs), tuple(Join("cusp") for _ in segs[1:]), name="four"),))
-    pooled, here = [], []
-    real_job, real_load = sections._trace_job, sections.load_integrator
-
-    def job(j):
-        if not here and slow == "first section":
-            time.sleep(0.3)
-        here.append(j[1])
-        return real_job(j)
+    real_load = sections.load_integrator
 
     def load():
         if slow == "loading the integrator":
             time.sleep(0.3)
         real_load()
 
-    def run_jobs(fn, jobs, workers, chunk=1):
-        pooled.extend(j[1] for j in jobs)
-        return (real_job(j) for j in jobs)
-
-    monkeypatch.setattr(sections, "_POOL_WORTH", 0.2)
-    monkeypatch.setattr(sections, "_trace_job", job)
+    here, pooled = _pool_recorded(monkeypatch, lambda done: time.sleep(0.3 if not done and slow == "first section"
+                                                                         else 0.0))
     monkeypatch.setattr(sections, "load_integrator", load)
-    monkeypatch.setattr(sections, "run_jobs", run_jobs)
     tr = trace_figure(fig, P, TraceOptions(workers=2))
     assert tr.success
     sections_in_order = [s.section for s in tr.sections]
@@ -498,25 +511,9 @@ def test_sections_go_to_the_pool_after_the_first_where_the_rest_would_take_longe
     here, more than a pool costs (0.2 s here), and they go to the pool at once, not after 0.2 s."""
     import time
 
-    from skatetrace.tracing import sections
-
     segs = [Segment(1.0 / (1.5 + 0.1 * i), 1.0 + 0.1 * i) for i in range(12)]
     fig = Figure("twelve", (Curve(tuple(segs), tuple(Join("cusp") for _ in segs[1:]), name="twelve"),))
-    pooled, here = [], []
-    real_job = sections._trace_job
-
-    def job(j):
-        time.sleep(0.03)
-        here.append(j[1])
-        return real_job(j)
-
-    def run_jobs(fn, jobs, workers, chunk=1):
-        pooled.extend(j[1] for j in jobs)
-        return (real_job(j) for j in jobs)
-
-    monkeypatch.setattr(sections, "_POOL_WORTH", 0.2)
-    monkeypatch.setattr(sections, "_trace_job", job)
-    monkeypatch.setattr(sections, "run_jobs", run_jobs)
+    here, pooled = _pool_recorded(monkeypatch, lambda done: time.sleep(0.03))
     tr = trace_figure(fig, P, TraceOptions(workers=2))
     assert tr.success
     sections_in_order = [s.section for s in tr.sections]

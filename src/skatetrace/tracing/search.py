@@ -109,7 +109,7 @@ def search_placements(placements: Iterator, solve: Callable[..., Attempt], optio
             nfev += stop_nfev  # one after another, the launch would not have been solved
             continue
         if attempt is None:  # pragma: no cover - solve stops short only beyond the bound it was given
-            raise RuntimeError(f"a placement was given up beyond a reach of {stop_reach!r} that the best does not bound")
+            raise RuntimeError(f"a placement was given up at a reach of {stop_reach!r}, within the best's")
         nfev += used
         if not attempt.success:
             first_failure = first_failure or attempt
