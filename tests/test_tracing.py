@@ -209,7 +209,7 @@ def test_evaluate_refuses_times_outside_the_section():
 
 
 def test_evaluate_gives_each_time_its_state_whatever_the_order_of_the_times():
-    # Times in order are shared out to the phases and legs by bisection, others through their
+    # Times in order are shared out to the phases by bisection, others through their
     # order: every time gets, bit for bit, what it gets alone, on either side of the breakpoints.
     fig = Figure("s", (Curve((Segment(1 / 1.5, 2.0), Segment(0.0, 1.0), Segment(-1 / 2.5, 2.5)),
                              (Join("smooth"), Join("smooth")), name="s"),))
