@@ -143,7 +143,7 @@ def _improves(key: tuple[float, float], best: tuple[float, float]) -> bool:
 
 def _bound(best) -> float:
     """The reach of the best placement so far (``(key, trace)`` or None), infinite before one works."""
-    return math.inf if best is None or not best[0] else best[0][0]
+    return math.inf if best is None else best[0][0]
 
 
 def outreaches(reach: float, bound: float) -> bool:

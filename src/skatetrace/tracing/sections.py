@@ -469,14 +469,6 @@ def _assemble(params, section, options, curve_index, glide, before, stop, launch
 _STEP_FRACTIONS = np.linspace(0.0, 1.0, 9)
 
 
-def _step_times(leg) -> np.ndarray:
-    """The local times of ``leg`` (of a manoeuvre) where a section's peaks are looked for: :data:`_STEP_FRACTIONS`
-    of each integration step."""
-    sol = leg.sol
-    return np.clip((sol.t_old[:, None] + sol.h[:, None] * _STEP_FRACTIONS).ravel(), min(leg.t0, leg.t1),
-                   max(leg.t0, leg.t1))
-
-
 def _stop_reach(stop: ManeuverSolution) -> float:
     """The largest ``|a|, |b|`` of the mass where the stop's integration steps begin.
 
@@ -509,7 +501,9 @@ def _step_samples(trace: SectionTrace) -> dict[str, np.ndarray]:
             rows.append(np.array([[p1, p1], [p2, p2], [a, a], [b, b], [0.0, 0.0], [0.0, 0.0]]))
             continue
         for leg in man.legs:
-            tl = _step_times(leg)
+            sol = leg.sol
+            tl = np.clip((sol.t_old[:, None] + sol.h[:, None] * _STEP_FRACTIONS).ravel(),
+                         min(leg.t0, leg.t1), max(leg.t0, leg.t1))
             y, adot, bdot = _leg_motion(params, man, leg, tl)
             times.append(trace._section_time(ph, tl))
             rows.append(np.vstack([y[:4], adot, bdot]))
