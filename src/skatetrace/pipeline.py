@@ -282,22 +282,25 @@ def _sampled_and_verified(trace, rel_tol: float):
 #: The largest figure :func:`trace_within_default_reach` plans: a school figure's size. At most as
 #: many unknowns in all its curves' programs as one program may have
 #: (:data:`~skatetrace.planning.collocation.MAX_UNKNOWNS`), and at most this many pieces. The
-#: school figures have 2,170 to 10,096 unknowns and 2 to 28 pieces, and are planned, traced and
+#: school figures have 1,666 to 7,720 unknowns and 2 to 28 pieces, and are planned, traced and
 #: verified in 1.5 to 8.9 s. A drawing's IPOPT iterations grow with its pieces as well as its
-#: unknowns: lucide-signature (45 pieces, 7,815 unknowns) took 19.5 s planned against 7.8 s traced
-#: with the launch-glide-stop manoeuvres, heroicons-star-solid-20 (49, 8,493) 11.2 s against 1.4 s,
-#: and the corpus drawings above 12,000 unknowns up to 145 s, 21 s at the median, against 3 s
-#: (``bench/CORPUS.md``, 2026-11-26).
-DEFAULT_PLAN_UNKNOWNS = 12_000
+#: unknowns: lucide-signature (45 pieces, 6,015 unknowns) took 19.5 s planned against 7.8 s traced
+#: with the launch-glide-stop manoeuvres, heroicons-star-solid-20 (49, 6,537) 11.2 s against 1.4 s,
+#: and the corpus drawings above 9,200 unknowns up to 145 s, 21 s at the median, against 3 s
+#: (``bench/CORPUS.md``, 2026-11-26, when the same meshes counted 1.31 times the unknowns and
+#: this was 12,000: the collocation's end states have since been merged with its nodes).
+DEFAULT_PLAN_UNKNOWNS = 9_200
 DEFAULT_PLAN_PIECES = 32
 #: The most IPOPT work (iterations times unknowns, summed over the programs:
 #: :attr:`TraceOptions.plan_budget`) :func:`trace_within_default_reach` spends on a plan. The
-#: school figures for a 1.7 m skater spend 97,000 to 756,000 (the paragraph double three), 0.8 to
-#: 6.5 s of IPOPT on one core. Of 65 icons of nine icon sets, 13 under the limits above spent 1.06
-#: to 4.5 million, 8.7 to 33 s of IPOPT, where their launch-glide-stop trace takes 1 to 3 s, and
-#: none of their plans was humanly feasible (2026-11-27; IPOPT's time grows as the unknowns^1.16
-#: an iteration, so the product of the two is a fair measure).
-DEFAULT_PLAN_BUDGET = 1_000_000
+#: school figures for a 1.7 m skater spend 69,000 to 527,000 (the paragraph double three), 0.5 to
+#: 3.0 s of IPOPT on one core (2026-11-28). Of 65 icons of nine icon sets, 13 under the limits
+#: above spent 1.06 to 4.5 million, 8.7 to 33 s of IPOPT, where their launch-glide-stop trace
+#: takes 1 to 3 s, and none of their plans was humanly feasible (2026-11-27, in the counts before
+#: the collocation's end states were merged with its nodes, 1.31 times today's for the same
+#: iterations, when this was 1,000,000; IPOPT's time grows as the unknowns^1.16 an iteration, so
+#: the product of the two is a fair measure).
+DEFAULT_PLAN_BUDGET = 765_000
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -42,7 +42,7 @@ Limits (measured; ``docs/concepts/feedback.md`` has the details)
 - For a sleigh that is not the model use :func:`robust_gains` and give the law the momenta its
   model assigns to the measured motion (as :mod:`~skatetrace.feedback.closed_loop` does). Under
   +-5 % on ``M, m, I``, 1 mm / 0.5 deg and a 10 ms delay, the circle eight planned within 0.5 m
-  stays within 0.157 m (p95 of 32; open loop 2.98 m), none diverging; the error is made where the
+  stays within 0.166 m (p95 of 32; open loop 1.22 m), none diverging; the error is made where the
   plan glides with the mass over the contact point. The launch-glide-stop circle eight (the mass
   metres away) still diverges in 7 of 32, mid-section at full speed.
 """

@@ -2,8 +2,13 @@
 
 Each section (rest to rest) is a chain of phases, one per piece, each of free duration, on a
 mesh of Radau collocation intervals (degree 3) graded towards the rests, where the mass moves
-fastest. The state is ``x = (p1, p2, a, b, s, u)`` of :mod:`skatetrace.planning.symbolic`; the
-control ``w = du/dt`` is constant on each interval, so ``u`` is piecewise linear in time: exactly
+fastest. Radau's last collocation point is the interval's end, so that point's state is the next
+node's, one unknown, not a copy tied to it by a constraint: an interval has 19 unknowns (its node,
+two inner points and the control), not 25, and IPOPT's linear systems are a fifth smaller, with
+the same optimum (the linked programs of the rocker, the one-foot eight, the change double three
+and the paragraph double three end at the same effort to five digits from the same start, in 4 to
+16 % less time). The state is ``x = (p1, p2, a, b, s, u)`` of :mod:`skatetrace.planning.symbolic`;
+the control ``w = du/dt`` is constant on each interval, so ``u`` is piecewise linear in time: exactly
 the form the exact finish (:mod:`skatetrace.planning.finish`) integrates. The curvature condition
 holds by construction (the rates follow from ``u``), so the blade follows every piece for every
 ``u``; what the program shapes is the motion of the mass.
@@ -37,17 +42,19 @@ _DEGREE = 3
 _STALLED = ("Error_In_Step_Computation", "Maximum_Iterations_Exceeded", "Restoration_Failed",
             "Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Level")
 _FEASIBLE = 1e-8
-#: The most unknowns a program may have. The school figures' largest curve has 10,096 (the
-#: paragraph double three, solved as its unit of 5,048), the corpus drawings' up to 35,000.
-#: Memory: CasADi and IPOPT take about 40 kB each (a single section of 24,000 unknowns: 0.9 GB).
-#: Time: IPOPT's iterations cost more as the program grows (45 ms at 4,500 unknowns, 250 ms at
-#: 16,000, 600 ms at 34,000), so a larger program takes minutes: the serpentine in exact mode (one
-#: section of 313 spirals, 33,691 unknowns) ran past 15 minutes, the three turn in exact mode (a
-#: section of 136 spirals, 14,677) took 398 s, and feather-settings' curve of 34,722 spent 21 s
-#: failing. A section that large is traced with the launch-glide-stop manoeuvres instead (the
-#: command line's default reach falls back to them); a curve that large is not linked (its
-#: chain of sections is the plan).
-MAX_UNKNOWNS = 12_000
+#: The most unknowns a program may have: the meshes that 12,000 allowed before the end states
+#: were merged with the nodes (25 unknowns an interval, not 19), so the same programs are refused.
+#: The school figures' largest curve has 7,720 (the paragraph double three, solved as its unit of
+#: 3,860), the corpus drawings' up to 27,000. Measured before that merge, in its counts: memory,
+#: CasADi and IPOPT take about 40 kB an unknown (a single section of 24,000: 0.9 GB); time,
+#: IPOPT's iterations cost more as the program grows (45 ms at 4,500 unknowns, 250 ms at 16,000,
+#: 600 ms at 34,000), so a larger program takes minutes: the serpentine in exact mode (one section
+#: of 313 spirals, 33,691 unknowns) ran past 15 minutes, the three turn in exact mode (a section
+#: of 136 spirals, 14,677) took 398 s, and feather-settings' curve of 34,722 spent 21 s failing.
+#: A section that large is traced with the launch-glide-stop manoeuvres instead (the command
+#: line's default reach falls back to them); a curve that large is not linked (its chain of
+#: sections is the plan).
+MAX_UNKNOWNS = 9_200
 
 
 def _radau() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -226,7 +233,7 @@ class _PieceLayout:
 
     T: int
     X: int  # 6 x (N + 1), column-major
-    Xc: int  # 6 x (degree N)
+    Xc: int  # 6 x ((degree - 1) N): the inner collocation points (the last one of an interval is its end node)
     W: int  # N
     nodes: np.ndarray  # the mesh (only its proportions count)
 
@@ -243,11 +250,17 @@ class _PieceLayout:
         return (self.nodes - self.nodes[0]) / (self.nodes[-1] - self.nodes[0])
 
     def interval_index(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per interval, the entries of the vector that make its unknowns ``(x_k, x_c, w, h)``, and their scales."""
+        """Per interval, the entries of the vector that make its unknowns ``(x_k, x_c, w, h)``, and their scales.
+
+        ``x_c`` is the state at the degree collocation points: the inner ones, then the last,
+        which is the next node.
+        """
         k = np.arange(self.N)
         index = np.empty((8 + 6 * _DEGREE, self.N), dtype=np.int64)
         index[0:6] = self.X + 6 * k + np.arange(6)[:, None]
-        index[6:6 + 6 * _DEGREE] = self.Xc + 6 * _DEGREE * k + np.arange(6 * _DEGREE)[:, None]
+        inner = 6 * (_DEGREE - 1)
+        index[6:6 + inner] = self.Xc + inner * k + np.arange(inner)[:, None]
+        index[6 + inner:6 + 6 * _DEGREE] = self.X + 6 * (k + 1) + np.arange(6)[:, None]
         index[-2] = self.W + k
         index[-1] = self.T
         scale = np.ones(index.shape)
@@ -267,7 +280,7 @@ def _layout(sections: list[SectionSpec], o: ProgramOptions, meshes) -> tuple[lis
         lays = []
         for nodes in (default_mesh if meshes is None else meshes[k]):
             N = len(nodes) - 1
-            lay = _PieceLayout(T=n, X=n + 1, Xc=n + 1 + 6 * (N + 1), W=n + 1 + 6 * (N + 1) + 6 * _DEGREE * N,
+            lay = _PieceLayout(T=n, X=n + 1, Xc=n + 1 + 6 * (N + 1), W=n + 1 + 6 * (N + 1) + 6 * (_DEGREE - 1) * N,
                                nodes=np.asarray(nodes, dtype=float))
             lays.append(lay)
             n = lay.end
@@ -350,7 +363,6 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
             cf = ca.DM(list(piece.coefficients))
             N = lay.N
             X = prog.view(lay.X, 6, N + 1)
-            Xc = prog.view(lay.Xc, 6, _DEGREE * N)
             g0, g1 = default_mesh[j][0], default_mesh[j][-1]
             prog.linear(prog.x[lay.T], 1e-6 * duration, np.inf)
             prog.x0[lay.T] = g1 - g0
@@ -361,13 +373,12 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
             p2g = (o.M + o.m) * vg - o.m * b_guess * kap * vg
             Xg = np.vstack([p1g, p2g, np.zeros_like(tg), np.full_like(tg, b_guess), sg, np.zeros_like(tg)])
             prog.x0[lay.X:lay.Xc] = Xg.ravel(order="F")
-            prog.x0[lay.Xc:lay.W] = np.repeat(Xg[:, 1:], _DEGREE, axis=1).ravel(order="F")
+            prog.x0[lay.Xc:lay.W] = np.repeat(Xg[:, 1:], _DEGREE - 1, axis=1).ravel(order="F")
             if x_prev_piece is not None:
                 prog.linear(X[:, 0] - x_prev_piece)
             index, scale = lay.interval_index()
             tc = g0 + (lay.frac[:-1, None] + np.diff(lay.frac)[:, None] * tau[None, 1:]) * (g1 - g0)
             prog.mapped(interval, index, scale, (cf, s_start), ((0.0, 0.0), "cost") + _path_bounds(o, tc.T, duration))
-            prog.linear(X[:, 1:] - Xc[:, _DEGREE - 1::_DEGREE])
             if j == 0:
                 prog.linear(X[4, 0])
                 prog.constrain(xi2f(X[:, 0], 0.0, cf, s_start))
@@ -552,6 +563,6 @@ def _set_guess(prog: SparseProgram, layout, guess: ProgramSolution) -> None:
             prog.x0[lay.X:lay.Xc] = X[:, i:i + N + 1].ravel(order="F")
             prog.x0[lay.W:lay.end] = W[i:i + N]
             lo, hi = X[:, i:i + N], X[:, i + 1:i + N + 1]
-            at_points = (lo[:, :, None] + (hi - lo)[:, :, None] * tau[None, None, :]).reshape(6, _DEGREE * N)
+            at_points = (lo[:, :, None] + (hi - lo)[:, :, None] * tau[None, None, :-1]).reshape(6, (_DEGREE - 1) * N)
             prog.x0[lay.Xc:lay.W] = at_points.ravel(order="F")
             i += N

@@ -112,9 +112,11 @@ def _program_options(params: SleighParams, options: TraceOptions) -> ProgramOpti
 
 
 #: A section planned on its own gets at most this many IPOPT iterations over its unknowns (and at
-#: most 500): the school figures' sections (at most 3,364 unknowns) keep their 500; a drawing's
-#: section of 12,000 gets 166 (at some 0.2 s each), where 500 took minutes.
-_SECTION_BUDGET = 2_000_000
+#: most 500): the school figures' sections (at most 2,560 unknowns) keep their 500; a drawing's
+#: section of 9,200 (the most a program may have) gets 166, where 500 took minutes. (Before the
+#: collocation's end states were merged with its nodes the same meshes counted 1.31 times the
+#: unknowns, and this was 2,000,000: the caps are the same.)
+_SECTION_BUDGET = 1_530_000
 
 
 def _rates(fn, X, spec: SectionSpec, at_end: bool):
@@ -336,24 +338,27 @@ _MESH_TOL = 1e-5
 #: The linked program starts from a feasible chain (the warm start): a small barrier parameter
 #: takes a third to a half fewer iterations (circle eight 38 against 137), and a program that has
 #: not converged in this many iterations is left for the chain (or kept where its last iterate is
-#: feasible). The school figures' linked programs converge in 18 to 85 iterations (their units in
-#: 20 to 67); one that does not crawls: a drawing's curve of 16 sections (bootstrap-bezier2, 15,935
-#: unknowns) was still lowering its effort by 0.1 % per ten iterations under a Hessian
-#: regularisation of 1e2 to 1e3 at 300 iterations, which took 88 s.
+#: feasible). The school figures' linked programs converge in 17 to 104 iterations within 0.5 m
+#: (2026-11-28; 18 to 85, their units 20 to 67, before session 54); one that does not crawls: a
+#: drawing's curve of 16 sections (bootstrap-bezier2, 15,935 unknowns as counted then) was still
+#: lowering its effort by 0.1 % per ten iterations under a Hessian regularisation of 1e2 to 1e3 at
+#: 300 iterations, which took 88 s.
 _LINKED_MU = 1e-4
 _LINKED_ITER = 150
 #: A larger linked program gets fewer iterations: at most this many over its unknowns (and at
 #: least a quarter of ``_LINKED_ITER``). IPOPT's time an iteration grows with the program (45 ms
-#: at 4,500 unknowns, 250 ms at 16,000), and a drawing's big program spends most of its
-#: iterations crawling: fontawesome-feather's curve of 7 sections (16,190 unknowns) lowered its
-#: effort from 124 to 51 in 46 iterations and to 45 in 150 (37 s), where it still had not
+#: at 4,500 unknowns, 250 ms at 16,000, as counted before the collocation's end states were
+#: merged with its nodes, when this was 750,000), and a drawing's big program spends most of its
+#: iterations crawling: fontawesome-feather's curve of 7 sections (16,190 unknowns then) lowered
+#: its effort from 124 to 51 in 46 iterations and to 45 in 150 (37 s), where it still had not
 #: converged; the whole drawing took 87 s, and 39 s with the budget. The school figures' linked
-#: programs (at most 5,048 unknowns, 61 iterations) are not touched.
-_LINKED_BUDGET = 750_000
+#: programs (at most 3,860 unknowns, 104 iterations) are not touched.
+_LINKED_BUDGET = 575_000
 #: Within a plan's budget (:func:`~skatetrace.planning.pool.spending`) the linked programs, which
 #: only improve the chain, spend at most this share of what the warm starts left (a drawing's ran
 #: on to 0.75 million of the default 1 million, and nothing was left to finish the chain with);
-#: the school figures' use at most 0.63 of it (the paragraph double three, 414,000 of 658,000).
+#: the school figures' use at most 0.63 of it (the paragraph double three, 414,000 of 658,000;
+#: both in the counts before the collocation's end states were merged with its nodes).
 _LINKED_SHARE = 0.75
 
 
