@@ -12,7 +12,7 @@ import pytest
 
 import skatetrace as st
 from skatetrace.verification.verify import (SPREAD_SHARE, _closed_loop, _conditioning, _measure, replay,
-                                            schedule_from_trace, verify)
+                                            schedule_from_trace, verify, verify_within)
 
 SVG = """<svg xmlns="http://www.w3.org/2000/svg" viewBox="-100 -300 400 400">
 <path d="M 0 0 A 60 60 0 1 1 60 -60 C 60 -100 120 -100 120 -140 A 60 60 0 1 1 180 -200" fill="none" stroke="black"/>
@@ -106,6 +106,50 @@ def test_a_schedule_that_is_not_the_trace_is_never_vouched_for_by_the_closed_loo
     report = verify(trace, bad)
     assert all(sec["instrument"] == "open loop" for sec in report.sections)
     assert not report.success
+
+
+def _open_loop_share(report) -> float:
+    """The largest share of its limits that a section verified by the open loop reaches (0.72 measured)."""
+    return max(max(max(sec["max_deviation_replay_to_figure"], sec["max_deviation_figure_to_replay"]) / report.tolerance,
+                   max(sec["start_speed"], sec["end_speed"]) / sec["cusp_speed_limit"])
+               for sec in report.sections if sec["instrument"] == "open loop")
+
+
+def test_verify_within_answers_as_verify_and_passed_within(arcs):
+    trace, schedule, _ = arcs
+    report = verify(trace, schedule)
+    assert report.success and {sec["instrument"] for sec in report.sections} == {"open loop", "closed loop"}
+    worst = _open_loop_share(report)  # the closed loop's sections reach far less
+    for share in (0.9 * worst, 1.1 * worst, 1.0):
+        within = verify_within(trace, schedule, share)
+        assert (within is not None) is report.passed_within(share) is (share > worst)
+        if within is not None:
+            assert [sec["instrument"] for sec in within.sections] == [sec["instrument"] for sec in report.sections]
+            assert within.max_deviation == report.max_deviation and within.cusp_speeds == report.cusp_speeds
+
+
+def test_verify_within_runs_no_closed_loop_where_the_open_loop_decides(arcs, monkeypatch):
+    import skatetrace.verification.verify as sv
+
+    def needless(*args, **kwargs):
+        raise AssertionError("the open loop had decided")
+
+    trace, schedule, _ = arcs
+    worst = _open_loop_share(verify(trace, schedule))
+    with monkeypatch.context() as m:
+        # a section passes the open loop beyond the share: nothing else can bring the report within it
+        m.setattr(sv, "_conditioning", needless)
+        m.setattr(sv, "_closed_loop", needless)
+        assert verify_within(trace, schedule, 0.9 * worst) is None
+    # At a tolerance that section 1 fails in the open loop too, with the closed loop allowed to stand in
+    # for section 2 alone: section 1 fails whatever the closed loop shows for section 2.
+    rel_tol = 0.5e-6 * worst
+    monkeypatch.setattr(sv, "_schedule_is_the_trace", lambda trace, schedule, si: si != 1)
+    report = verify(trace, schedule, rel_tol=rel_tol)
+    assert not report.success and not report.sections[1]["passed"]
+    assert [sec["instrument"] for sec in report.sections][1:] == ["open loop", "closed loop"]
+    monkeypatch.setattr(sv, "_closed_loop", needless)
+    assert verify_within(trace, schedule, 1.0, rel_tol=rel_tol) is None
 
 
 def test_the_arc_invariant_holds_on_pieces_skated_backwards(arcs):

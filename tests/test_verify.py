@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from skatetrace.dynamics.model import SleighParams
+from skatetrace.verification.distances import figure_to_replay
 
 verify_module = importlib.import_module("skatetrace.verification.verify")  # the package exports the function as verify
 
@@ -36,12 +37,12 @@ def test_figure_to_replay_uses_the_velocity_on_each_side_of_a_jump():
     end = 1.0 + 3.0 * 0.5
     ang = np.linspace(0.0, end, 400)
     points = np.vstack([np.cos(ang), np.sin(ang)])
-    d = verify_module._figure_to_replay(points, rep, np.ones(times.size, bool), params)
+    d = figure_to_replay(points, rep, np.ones(times.size, bool), params)
     # cubic Hermite interpolation of a circle in 0.1-radian steps is off by about 0.1**4 / 384 = 2.6e-7
     assert d.max() < 1e-6, d.max()
     # the same replay interpolated with the left-hand speed past the jump strays by far more
     bad = _circle_replay(params, np.delete(times, 11), np.delete(speeds, 11))
-    assert verify_module._figure_to_replay(points, bad, np.ones(times.size - 1, bool), params).max() > 1e-4
+    assert figure_to_replay(points, bad, np.ones(times.size - 1, bool), params).max() > 1e-4
 
 
 def test_figure_to_replay_sees_past_a_run_of_repeated_rows():
@@ -51,7 +52,7 @@ def test_figure_to_replay_sees_past_a_run_of_repeated_rows():
     speeds = np.ones(times.size)
     rep = _circle_replay(params, times, speeds)
     ang = np.linspace(0.0, 2.0, 400)
-    d = verify_module._figure_to_replay(np.vstack([np.cos(ang), np.sin(ang)]), rep, np.ones(times.size, bool), params)
+    d = figure_to_replay(np.vstack([np.cos(ang), np.sin(ang)]), rep, np.ones(times.size, bool), params)
     assert d.max() < 1e-6, d.max()
 
 
@@ -68,7 +69,7 @@ def test_distance_search_matches_a_brute_force_minimum():
     ang = rng.uniform(0.05, np.sum(np.diff(times) * speeds[:-1]) - 0.05, 300)
     rad = 1.0 + rng.uniform(-0.02, 0.02, 300)
     points = np.vstack([rad * np.cos(ang), rad * np.sin(ang)])
-    d = verify_module._figure_to_replay(points, rep, np.ones(times.size, bool), params)
+    d = figure_to_replay(points, rep, np.ones(times.size, bool), params)
     hh = np.diff(times)
     vx, vy = v * np.cos(th), v * np.sin(th)
 
@@ -186,6 +187,7 @@ def test_many_sections_are_sampled_side_by_side_as_one_by_one_and_the_verificati
     trace = st.trace_figure(figure, figure.params)
     assert len(trace.sections) == 20 and all(s.success for s in trace.sections)
     monkeypatch.setattr(verify_module, "_FORK_SECTIONS", 10**9)
+    monkeypatch.setattr(verify_module, "_FORK_LEGS", 10**9)
     alone, alone_states = verify_module.schedule_from_trace(trace)
     monkeypatch.setattr(verify_module, "_FORK_SECTIONS", 2)
     monkeypatch.setattr(verify_module, "_SAMPLE_ROUND", 3)
@@ -204,6 +206,31 @@ def test_many_sections_are_sampled_side_by_side_as_one_by_one_and_the_verificati
         assert {total for s, _, total in seen if s == stage} == {20}
     assert [s for s, _, _ in seen] == sorted((s for s, _, _ in seen), key=["sampling the controls", "replaying",
                                                                           "measuring"].index)
+
+
+def test_few_sections_of_many_legs_are_sampled_side_by_side(monkeypatch):
+    # a planned section has some forty manoeuvre legs, each about as costly to sample as a
+    # launch-glide-stop section's few: the legs, not only the sections, decide
+    import skatetrace as st
+
+    pieces = [{"type": "line", "length": 1.0 + 0.05 * k} for k in range(4)]
+    joins = [{"type": "cusp", "pivot_deg": 40.0 * (-1) ** k} for k in range(3)]
+    trace = st.trace_figure(st.figure_from_dict({"curves": [{"pieces": pieces, "joins": joins}]}))
+    legs = sum(len(ph.maneuver.legs) for sec in trace.sections for ph in sec.phases if ph.maneuver is not None)
+    batches = []
+    forked = verify_module.map_forked
+
+    def counted(fn, items, workers=None):
+        batches.append(len(items))
+        return forked(fn, items, workers)
+
+    monkeypatch.setattr(verify_module, "map_forked", counted)
+    monkeypatch.setattr(verify_module, "_FORK_SECTIONS", 10**9)
+    for threshold, sizes in ((legs + 1, [1, 1, 1, 1]), (legs, [4])):
+        monkeypatch.setattr(verify_module, "_FORK_LEGS", threshold)
+        batches.clear()
+        verify_module.schedule_from_trace(trace)
+        assert batches == sizes
 
 
 def test_a_section_through_the_contact_point_is_not_sampled_to_round_off(monkeypatch, tmp_path):

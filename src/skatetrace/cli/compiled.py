@@ -2,7 +2,7 @@
 
 The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`),
 the closed-loop replay (:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
-(:mod:`skatetrace.feedback.riccati`), the distance checks of :mod:`skatetrace.verification.verify`,
+(:mod:`skatetrace.feedback.riccati`), the distance checks of :mod:`skatetrace.verification.distances`,
 the spirals' geometry (:mod:`skatetrace.figures.spiral_paths`) and the planner's exact finish
 (:mod:`skatetrace.planning.shooting`) are compiled by numba with ``cache=True``: the first run on a
 machine compiles them (10-30 s, depending on the machine) and writes the machine code to numba's
@@ -37,7 +37,8 @@ ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
     ("the verifying replay", (("skatetrace.dynamics.replayer", "_run"),)),
     ("the closed-loop replay", (("skatetrace.feedback.law_replay", "_run"),)),
     ("the tracking law's Riccati equation", (("skatetrace.feedback.riccati", "_run"),)),
-    ("the distance checks", (("skatetrace.verification.verify", "_golden_distances"), ("skatetrace.verification.verify", "_hermite_distance"))),
+    ("the distance checks", (("skatetrace.verification.distances", "_golden_distances"),
+                             ("skatetrace.verification.distances", "_hermite_distance"))),
     ("the spirals' geometry", (("skatetrace.figures.spiral_paths", "cell_nodes"),
                                ("skatetrace.figures.spiral_paths", "positions"),
                                ("skatetrace.figures.spiral_paths", "foot_points"))),
@@ -145,14 +146,15 @@ def _exercise_distances() -> None:
     import numpy as np
 
     from ..dynamics.model import SleighParams
-    from ..verification.verify import Replay, _figure_to_replay
+    from ..verification.distances import figure_to_replay
+    from ..verification.verify import Replay
 
     n = 3
     state = np.zeros((5, n))
     state[1], state[3] = 1.0, np.arange(n, dtype=float)
     rep = Replay(t=np.arange(n, dtype=float), state=state, controls=np.zeros((4, n)), section=np.zeros(n, dtype=int),
                  piece=np.zeros(n, dtype=int))
-    _figure_to_replay(np.array([[0.5, 1.5], [0.1, 0.1]]), rep, np.ones(n, dtype=bool), SleighParams())
+    figure_to_replay(np.array([[0.5, 1.5], [0.1, 0.1]]), rep, np.ones(n, dtype=bool), SleighParams())
 
 
 #: What compiles each part that :func:`compile_ahead` can compile on its own (without a trace).
