@@ -108,11 +108,20 @@ def test_a_schedule_that_is_not_the_trace_is_never_vouched_for_by_the_closed_loo
     assert not report.success
 
 
+def _share(sec, tol) -> float:
+    return max(max(sec["max_deviation_replay_to_figure"], sec["max_deviation_figure_to_replay"]) / tol,
+               max(sec["start_speed"], sec["end_speed"]) / sec["cusp_speed_limit"])
+
+
+def _worst_section(report) -> int:
+    """The section verified by the open loop that comes nearest a limit."""
+    return max((si for si, sec in enumerate(report.sections) if sec["instrument"] == "open loop"),
+               key=lambda si: _share(report.sections[si], report.tolerance))
+
+
 def _open_loop_share(report) -> float:
     """The largest share of its limits that a section verified by the open loop reaches (0.72 measured)."""
-    return max(max(max(sec["max_deviation_replay_to_figure"], sec["max_deviation_figure_to_replay"]) / report.tolerance,
-                   max(sec["start_speed"], sec["end_speed"]) / sec["cusp_speed_limit"])
-               for sec in report.sections if sec["instrument"] == "open loop")
+    return _share(report.sections[_worst_section(report)], report.tolerance)
 
 
 def test_verify_within_answers_as_verify_and_passed_within(arcs):
@@ -121,11 +130,14 @@ def test_verify_within_answers_as_verify_and_passed_within(arcs):
     assert report.success and {sec["instrument"] for sec in report.sections} == {"open loop", "closed loop"}
     worst = _open_loop_share(report)  # the closed loop's sections reach far less
     for share in (0.9 * worst, 1.1 * worst, 1.0):
-        within = verify_within(trace, schedule, share)
-        assert (within is not None) is report.passed_within(share) is (share > worst)
+        within, beyond = verify_within(trace, schedule, share)
+        assert (within is not None) is report.passed_within(share) is (share > worst) is (beyond == ())
         if within is not None:
             assert [sec["instrument"] for sec in within.sections] == [sec["instrument"] for sec in report.sections]
             assert within.max_deviation == report.max_deviation and within.cusp_speeds == report.cusp_speeds
+        else:
+            # the open loop's section beyond the share, and the one it fails (the closed loop's, undecided)
+            assert beyond == tuple(sorted({_worst_section(report), 2}))
 
 
 def test_verify_within_runs_no_closed_loop_where_the_open_loop_decides(arcs, monkeypatch):
@@ -140,7 +152,7 @@ def test_verify_within_runs_no_closed_loop_where_the_open_loop_decides(arcs, mon
         # a section passes the open loop beyond the share: nothing else can bring the report within it
         m.setattr(sv, "_conditioning", needless)
         m.setattr(sv, "_closed_loop", needless)
-        assert verify_within(trace, schedule, 0.9 * worst) is None
+        assert verify_within(trace, schedule, 0.9 * worst)[0] is None
     # At a tolerance that section 1 fails in the open loop too, with the closed loop allowed to stand in
     # for section 2 alone: section 1 fails whatever the closed loop shows for section 2.
     rel_tol = 0.5e-6 * worst
@@ -149,7 +161,8 @@ def test_verify_within_runs_no_closed_loop_where_the_open_loop_decides(arcs, mon
     assert not report.success and not report.sections[1]["passed"]
     assert [sec["instrument"] for sec in report.sections][1:] == ["open loop", "closed loop"]
     monkeypatch.setattr(sv, "_closed_loop", needless)
-    assert verify_within(trace, schedule, 1.0, rel_tol=rel_tol) is None
+    within, beyond = verify_within(trace, schedule, 1.0, rel_tol=rel_tol)
+    assert within is None and 1 in beyond and 2 in beyond
 
 
 def test_the_arc_invariant_holds_on_pieces_skated_backwards(arcs):

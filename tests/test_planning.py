@@ -134,6 +134,47 @@ def through_a_cusp(request):
     return fig, st.trace_and_verify(fig, options=st.TraceOptions(reach=1.0))
 
 
+@pytest.fixture(scope="module")
+def pivot_plan():
+    fig = figure_from_dict(CUSPS["pivot"])
+    return fig, plan_figure(fig, options=st.TraceOptions(reach=1.0))
+
+
+def test_the_sections_that_come_close_to_a_limit_are_sampled_again_and_the_others_kept(pivot_plan, monkeypatch):
+    import skatetrace.pipeline as pipeline
+    from skatetrace.verification.verify import resampled, schedule_from_trace
+
+    fig, trace = pivot_plan
+    assert trace.success and len(trace.sections) == 2
+    coarse, coarse_states = schedule_from_trace(trace, fine=False)
+    middle, middle_states = schedule_from_trace(trace, fine=30)
+    part, _ = schedule_from_trace(trace, fine=30, sections=[1])
+    assert set(part.section) == {1}
+    np.testing.assert_array_equal(part.t, middle.t[middle.section == 1])
+    mixed, mixed_states = resampled(trace, coarse, coarse_states, [1], fine=30)
+    assert coarse.t.size < mixed.t.size < middle.t.size and np.all(np.diff(mixed.t) >= 0)
+    for rows, source, states in ((mixed.section == 0, (coarse, coarse.section == 0), coarse_states),
+                                 (mixed.section == 1, (middle, middle.section == 1), middle_states)):
+        sched, own = source
+        for k in ("t", "a", "b", "adot", "bdot", "piece"):
+            np.testing.assert_array_equal(getattr(mixed, k)[rows], getattr(sched, k)[own])
+        for k in states:
+            np.testing.assert_array_equal(mixed_states[k][rows], states[k][own])
+    # the pipeline samples again only the sections its coarse replay names
+    asked = []
+    real = pipeline.verify_within
+
+    def named_second(trace, schedule, share, rel_tol):
+        asked.append(schedule.t.size)
+        return (None, (1,)) if len(asked) == 1 else real(trace, schedule, share, rel_tol=rel_tol)
+
+    monkeypatch.setattr(pipeline, "verify_within", named_second)
+    kept = pipeline._sampled_and_verified(trace, 1e-6)
+    assert asked == [coarse.t.size, mixed.t.size]
+    assert kept[2].success
+    np.testing.assert_array_equal(kept[0].t, mixed.t)
+
+
 def test_a_planned_cusp_is_exact_verified_and_keeps_the_mass_in_place(through_a_cusp):
     fig, result = through_a_cusp
     assert result.success, result.message

@@ -25,7 +25,7 @@ import contextlib
 import math
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any, Callable
+from typing import Any, Callable, Collection
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -40,7 +40,8 @@ from ..progress import Channel
 from ..tracing.sections import FigureTrace
 from .distances import figure_to_replay, nearer_piece
 
-__all__ = ["schedule_from_trace", "Replay", "VerificationReport", "replay", "reporting", "verify", "verify_within"]
+__all__ = ["schedule_from_trace", "resampled", "Replay", "VerificationReport", "replay", "reporting", "verify",
+           "verify_within"]
 
 #: Bounds on the dense samples of the replay and of the figure, so that memory stays bounded for
 #: any figure size and speed (figures of ordinary size and duration stay far below them).
@@ -131,14 +132,16 @@ def _sample_section(sec, fine: bool | float = True) -> tuple[np.ndarray, dict[st
     return np.concatenate(spans), v
 
 
-def schedule_from_trace(trace: FigureTrace, *, fine: bool | float = True) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
+def schedule_from_trace(trace: FigureTrace, *, fine: bool | float = True,
+                        sections: Collection[int] | None = None) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
     """Sample every section's controls densely enough for cubic Hermite interpolation.
 
     Planned sections (:mod:`skatetrace.planning`) are sampled :data:`PLANNED_REFINEMENT` (a thousand)
     times more finely than the others (values to 1e-14 of their largest, rates to 1e-12): the mass
     moves fast through their rests, where the replay's momenta must cancel its rates. ``fine=False``
     samples them as the others, and a number ``fine >= 1`` that many times more finely.
-    :func:`~skatetrace.pipeline.trace_and_verify` tries them coarser first.
+    :func:`~skatetrace.pipeline.trace_and_verify` tries them coarser first. ``sections``: the
+    indices of the sections to sample (all by default); the rows hold only theirs.
 
     Raises
     ------
@@ -154,9 +157,10 @@ def schedule_from_trace(trace: FigureTrace, *, fine: bool | float = True) -> tup
     # Sections traced once and reused by trace_figure (the same shape elsewhere in the figure)
     # share their phases, hence their controls: they are sampled once and only laid out anew.
     # Many distinct sections are sampled side by side, a round at a time (the same samples).
+    wanted = [sec.phases and (sections is None or si in sections) for si, sec in enumerate(trace.sections)]
     distinct: dict[tuple[int, int], Any] = {}
-    for sec in trace.sections:
-        if sec.phases:
+    for sec, want in zip(trace.sections, wanted):
+        if want:
             distinct.setdefault((id(sec.phases), sec.direction), sec)
     keys, firsts = list(distinct), list(distinct.values())
     legs = sum(len(ph.maneuver.legs) for sec in firsts for ph in sec.phases if ph.maneuver is not None)
@@ -166,7 +170,7 @@ def schedule_from_trace(trace: FigureTrace, *, fine: bool | float = True) -> tup
         sampled.update(zip(keys[k:k + step], map_forked(partial(_sample_section, fine=fine), firsts[k:k + step])))
         _PROGRESS.report("sampling the controls", min(k + step, len(firsts)), len(firsts))
     for si, (sec, t_start) in enumerate(zip(trace.sections, trace.start_times)):
-        if not sec.phases:
+        if not wanted[si]:
             continue
         ts, v = sampled[(id(sec.phases), sec.direction)]
         x, y, theta = sec.layout(v["s"], v["segment"])
@@ -181,6 +185,23 @@ def schedule_from_trace(trace: FigureTrace, *, fine: bool | float = True) -> tup
                                section=arr["section"].astype(int), piece=arr["piece"].astype(int))
     states = {k: arr[k] for k in ("x", "y", "theta", "p1", "p2", "xi1", "xi2")}
     return schedule, states
+
+
+def resampled(trace: FigureTrace, schedule: ControlSchedule, states: dict[str, np.ndarray], sections: Collection[int],
+              *, fine: bool | float) -> tuple[ControlSchedule, dict[str, np.ndarray]]:
+    """``schedule`` and its ``states`` (:func:`schedule_from_trace`) with the rows of ``sections`` sampled again as
+    ``fine`` asks; every other section's rows as they were."""
+    part, part_states = schedule_from_trace(trace, fine=fine, sections=sections)
+    kept = ~np.isin(schedule.section, np.fromiter(sections, dtype=int))
+    # each section's rows are consecutive, in time order, from one of the two: a stable sort by section
+    order = np.argsort(np.concatenate([schedule.section[kept], part.section]), kind="stable")
+
+    def merged(base: np.ndarray, new: np.ndarray) -> np.ndarray:
+        return np.concatenate([base[kept], new])[order]
+
+    fields = {k: merged(getattr(schedule, k), getattr(part, k)) for k in ("t", "a", "b", "adot", "bdot", "section",
+                                                                           "piece")}
+    return ControlSchedule(**fields), {k: merged(v, part_states[k]) for k, v in states.items()}
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -582,37 +603,53 @@ def verify(trace: FigureTrace, schedule: ControlSchedule | None = None, *, rel_t
     ValueError
         If ``rel_tol`` is not a number in (0, 1] (a NaN tolerance would pass every check).
     """
-    return _verified(trace, schedule, rel_tol, None)
+    return _verified(trace, schedule, rel_tol, None)[0]
 
 
 def verify_within(trace: FigureTrace, schedule: ControlSchedule, share: float, *,
-                  rel_tol: float = 1e-6) -> VerificationReport | None:
-    """:func:`verify`'s report where it passes within ``share`` of every limit, else None.
+                  rel_tol: float = 1e-6) -> tuple[VerificationReport | None, tuple[int, ...]]:
+    """:func:`verify`'s report where it passes within ``share`` of every limit, else the sections that keep it from it.
 
-    The same answer as ``verify`` followed by :meth:`VerificationReport.passed_within`, sooner
-    where the open-loop replay already decides it: a section that passes in the open loop keeps
-    that loop's numbers, so where one of them lies beyond ``share`` of its limit, or where a
-    section that fails cannot be verified by the closed loop instead, neither the replay's
-    conditioning nor the closed loop is run. (A plan sampled coarsely whose replay comes that
-    close to a limit is sampled again more finely, :func:`~skatetrace.pipeline.trace_and_verify`:
-    the closed loop would have cost it more than the first replay.)
+    Returns ``(report, ())`` where ``verify`` followed by :meth:`VerificationReport.passed_within`
+    passes, else ``(None, sections)``. The answer comes sooner where the open-loop replay already
+    decides it: a section that passes in the open loop keeps that loop's numbers, so where one of
+    them lies beyond ``share`` of its limit, or where a section that fails cannot be verified by
+    the closed loop instead, neither the replay's conditioning nor the closed loop is run. The
+    sections named are then those beyond the share and those that fail the open loop (undecided);
+    else those whose verdict lies beyond the share or fails; every section where the trace
+    failed or the replay broke down. (A plan sampled coarsely whose replay comes that close to a
+    limit has those sections sampled again more finely, :func:`~skatetrace.pipeline.trace_and_verify`.)
     """
-    report = _verified(trace, schedule, rel_tol, share)
-    return report if report is not None and report.passed_within(share) else None
+    report, beyond = _verified(trace, schedule, rel_tol, share)
+    if report is not None:
+        if report.passed_within(share):
+            return report, ()
+        beyond = _outside({si: rec for si, rec in enumerate(report.sections)}, share, report.tolerance)
+    return None, beyond or tuple(range(len(trace.sections)))
 
 
-def _beyond_share(trace: FigureTrace, rep: Replay, measured: dict, failing: list[int], share: float, tol: float) -> bool:
-    """Whether the open loop's ``measured`` records already keep the report from passing within ``share``."""
+def _outside(records: dict[int, dict], share: float, tol: float) -> tuple[int, ...]:
+    """The traced sections of ``records`` that fail, or lie beyond ``share`` of the tolerance or of their cusp-speed limit."""
+    return tuple(si for si, r in records.items() if r["traced"] and (
+        not r["passed"] or max(r["max_deviation_replay_to_figure"], r["max_deviation_figure_to_replay"]) > share * tol
+        or max(r["start_speed"], r["end_speed"]) > share * r["cusp_speed_limit"]))
+
+
+def _open_loop_beyond(trace: FigureTrace, rep: Replay, measured: dict, failing: list[int], share: float,
+                      tol: float) -> tuple[int, ...]:
+    """Where the open loop's ``measured`` records already keep the report from passing within ``share``: the
+    sections that pass it beyond the share, with those that fail it; else (nothing decided) none."""
     if not trace.success or not np.all(np.isfinite(rep.state)):
-        return True
-    return any(max(r["max_deviation_replay_to_figure"], r["max_deviation_figure_to_replay"]) > share * tol
-               or max(r["start_speed"], r["end_speed"]) > share * r["cusp_speed_limit"]
-               for si, (r, _) in measured.items() if r["traced"] and si not in failing)
+        return tuple(range(len(trace.sections)))
+    passing = {si: r for si, (r, _) in measured.items() if si not in failing}
+    beyond = _outside(passing, share, tol)
+    return tuple(sorted(beyond + tuple(failing))) if beyond else ()
 
 
 def _verified(trace: FigureTrace, schedule: ControlSchedule | None, rel_tol: float,
-              within: float | None) -> VerificationReport | None:
-    """:func:`verify`; None as soon as the report is sure not to pass within ``within`` of every limit (if given)."""
+              within: float | None) -> tuple[VerificationReport | None, tuple[int, ...]]:
+    """``(report, ())``: :func:`verify`; or ``(None, sections)`` as soon as the report is sure not to pass within
+    ``within`` of every limit (if given), with the sections that keep it from it (see :func:`verify_within`)."""
     check_rel_tol(rel_tol)
     if schedule is None:
         schedule, _ = schedule_from_trace(trace)
@@ -623,15 +660,16 @@ def _verified(trace: FigureTrace, schedule: ControlSchedule | None, rel_tol: flo
     conditioning = {}
     decided = rep  # the rows each section's verdict rests on
     failing = [si for si, (r, _) in measured.items() if r["traced"] and not r["passed"] and trace.sections[si].success]
-    if within is not None and _beyond_share(trace, rep, measured, failing, within, tol):
-        return None
+    beyond = () if within is None else _open_loop_beyond(trace, rep, measured, failing, within, tol)
+    if beyond:
+        return None, beyond
     if failing and np.all(np.isfinite(rep.state)):
         conditioning = _conditioning(trace, schedule, rep, failing, {si: measured[si][0] for si in failing}, tol)
         # the closed loop follows the trace's own motion: it stands in only for the trace's own schedule
         ill = [si for si in failing if conditioning[si]["ill_conditioned"] and _closed_loop_resolves(trace, si)
                and _schedule_is_the_trace(trace, schedule, si)]
         if within is not None and len(ill) < len(failing):
-            return None  # a section fails the open loop's check, and the closed loop cannot stand in for it
+            return None, tuple(failing)  # a section fails the open loop, and the closed loop cannot stand in for it
         if ill:
             closed, corrections, spreads = _closed_loop(trace, rep, ill)
             ill = list(corrections)
@@ -697,4 +735,4 @@ def _verified(trace: FigureTrace, schedule: ControlSchedule | None, rel_tol: flo
         figure_size=size, tolerance=tol, max_deviation=max_dev, max_deviation_to_figure=dev_to,
         max_deviation_from_figure=dev_from, max_cusp_speed=max_cusp, cusp_speeds=cusp_speeds,
         sections=sections, invariant_drift=drifts, replay=decided,
-    )
+    ), ()
