@@ -33,7 +33,8 @@ __all__ = ["ENTRY_POINTS", "cache_is_warm", "compile_ahead", "reporting", "warm_
 
 #: The compiled functions called from Python, by part: compiling them compiles everything they call.
 ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
-    ("the manoeuvre integrator", (("skatetrace.dynamics.integrator", "_run"), ("skatetrace.dynamics.integrator", "_evaluate_steps"))),
+    ("the manoeuvre integrator", (("skatetrace.dynamics.integrator", "_run"), ("skatetrace.dynamics.integrator", "_evaluate_steps"),
+                                  ("skatetrace.tracing.leg_motion", "_motion"))),
     ("the verifying replay", (("skatetrace.dynamics.replayer", "_run"),)),
     ("the closed-loop replay", (("skatetrace.feedback.law_replay", "_run"),)),
     ("the tracking law's Riccati equation", (("skatetrace.feedback.riccati", "_run"),)),

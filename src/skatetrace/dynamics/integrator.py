@@ -404,6 +404,11 @@ class DenseSolution:
         self.t_old, self.h, self.y_old, self.F = t_old[order], h[order], y_old[order], F[order]
         self._ends = np.minimum(self.t_old, self.t_old + self.h)  # left end of each step
 
+    @property
+    def ends(self) -> np.ndarray:
+        """The left end of each step, in increasing order (where :meth:`__call__` looks a time up)."""
+        return self._ends
+
     def __getstate__(self):
         return (self.t_old, self.h, self.y_old, self.F)
 

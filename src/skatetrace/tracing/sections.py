@@ -34,7 +34,9 @@ from ..dynamics.model import SleighParams, mass_energy, velocities
 from ..figures.figure import Figure, Section
 from ..figures.geometry import travel
 from ..processes import run_jobs
-from .maneuver import ManeuverSolution, constrained_rates, glide_state, mirrored_maneuver, same_legs, solve_stop
+from .leg_motion import leg_motion
+from .leg_motion import load as load_leg_motion
+from .maneuver import ManeuverSolution, glide_state, mirrored_maneuver, same_legs, solve_stop
 from .options import BRIEF_PLACEMENTS, LONG_SECTION, SHORT_SECTION, TraceOptions
 from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
 from .search import Attempt, outreaches, search_placements
@@ -66,14 +68,6 @@ class _Phase:
     s0: float  # section arc length at the phase's start
     kappa: float = 0.0  # glide curvature
     segment: int | None = None  # piece where the phase starts (planned phases; else the glide's)
-
-
-def _leg_motion(params: SleighParams, man: ManeuverSolution, leg, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """On ``leg`` of manoeuvre ``man`` at its local times ``t`` (unit speed): the states ``(p1, p2, a, b, s)``
-    (rows) and the control rates ``adot, bdot`` that hold the leg's curvature."""
-    y = leg.sol(t)
-    adot, bdot, _ = constrained_rates(params, leg.kappa_at(y[4]), y[0], y[1], y[2], y[3], man.control(t))
-    return y, adot, bdot
 
 
 def _by_phase(tn: np.ndarray, phases, right: bool, end: float) -> list:
@@ -219,7 +213,7 @@ class SectionTrace:
             for j in np.unique(which):
                 leg, m = legs[j], which == j
                 tj = np.clip(tl[m], los[j], his[j])
-                y, ad, bd = _leg_motion(self.params, man, leg, tj)
+                y, ad, bd = leg_motion(self.params, man, leg, tj)
                 for key, val in zip(("p1", "p2", "a", "b", "s", "adot", "bdot"), (*y, ad, bd)):
                     vals[key][m] = val
                 vseg[m] = segidx[j]
@@ -504,7 +498,7 @@ def _step_samples(trace: SectionTrace) -> dict[str, np.ndarray]:
             sol = leg.sol
             tl = np.clip((sol.t_old[:, None] + sol.h[:, None] * _STEP_FRACTIONS).ravel(),
                          min(leg.t0, leg.t1), max(leg.t0, leg.t1))
-            y, adot, bdot = _leg_motion(params, man, leg, tl)
+            y, adot, bdot = leg_motion(params, man, leg, tl)
             times.append(trace._section_time(ph, tl))
             rows.append(np.vstack([y[:4], adot, bdot]))
     t, first = np.unique(np.concatenate(times), return_index=True)
@@ -670,6 +664,7 @@ def _solve_sections(jobs: list, workers: int | None):
     if not jobs:
         return
     load_integrator()
+    load_leg_motion()
     pieces = [len(job[1].pieces) for job in jobs]
     if sum(p > 1 for p in pieces) >= 2:
         order = sorted(range(len(jobs)), key=lambda k: -pieces[k])  # stable: ties in skating order
