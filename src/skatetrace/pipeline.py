@@ -249,7 +249,8 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
 
 
 #: A plan sampled like a traced figure is kept where its replay passes within this share of every
-#: limit (:func:`_sampled_and_verified`); so is one sampled :data:`_MIDDLE_REFINEMENT` times more finely.
+#: limit (:func:`_sampled_and_verified`); so is one whose sections that did not are sampled
+#: :data:`_MIDDLE_REFINEMENT` times more finely.
 _COARSE_MARGIN = 0.5
 _MIDDLE_REFINEMENT = 30.0
 

@@ -1,7 +1,7 @@
 """The compiled numerical core: is numba's on-disk cache of it ready, and compiling it ahead of a run.
 
 The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`),
-the closed-loop replay (:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
+a manoeuvre leg's motion (:mod:`skatetrace.tracing.leg_motion`), the closed-loop replay (:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
 (:mod:`skatetrace.feedback.riccati`), the distance checks of :mod:`skatetrace.verification.distances`,
 the spirals' geometry (:mod:`skatetrace.figures.spiral_paths`) and the planner's exact finish
 (:mod:`skatetrace.planning.shooting`) are compiled by numba with ``cache=True``: the first run on a
