@@ -1,7 +1,8 @@
 """The compiled numerical core: is numba's on-disk cache of it ready, and compiling it ahead of a run.
 
 The integrators (:mod:`skatetrace.dynamics.integrator`, :mod:`skatetrace.dynamics.replayer`, :mod:`skatetrace.dynamics.dop853`),
-a manoeuvre leg's motion (:mod:`skatetrace.tracing.leg_motion`), the closed-loop replay (:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
+a manoeuvre leg's motion (:mod:`skatetrace.tracing.leg_motion`), the closed-loop replay
+(:mod:`skatetrace.feedback.law_replay`) and the tracking law's Riccati equation
 (:mod:`skatetrace.feedback.riccati`), the distance checks of :mod:`skatetrace.verification.distances`,
 the spirals' geometry (:mod:`skatetrace.figures.spiral_paths`) and the planner's exact finish
 (:mod:`skatetrace.planning.shooting`) are compiled by numba with ``cache=True``: the first run on a
@@ -33,7 +34,8 @@ __all__ = ["ENTRY_POINTS", "cache_is_warm", "compile_ahead", "reporting", "warm_
 
 #: The compiled functions called from Python, by part: compiling them compiles everything they call.
 ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
-    ("the manoeuvre integrator", (("skatetrace.dynamics.integrator", "_run"), ("skatetrace.dynamics.integrator", "_evaluate_steps"),
+    ("the manoeuvre integrator", (("skatetrace.dynamics.integrator", "_run"),
+                                  ("skatetrace.dynamics.integrator", "_evaluate_steps"),
                                   ("skatetrace.tracing.leg_motion", "_motion"))),
     ("the verifying replay", (("skatetrace.dynamics.replayer", "_run"),)),
     ("the closed-loop replay", (("skatetrace.feedback.law_replay", "_run"),)),
