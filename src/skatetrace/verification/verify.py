@@ -629,7 +629,7 @@ def verify_within(trace: FigureTrace, schedule: ControlSchedule, share: float, *
 
 
 def _outside(records: dict[int, dict], share: float, tol: float) -> tuple[int, ...]:
-    """The traced sections of ``records`` that fail, or lie beyond ``share`` of the tolerance or of a cusp-speed limit."""
+    """The traced sections of ``records`` that fail, or lie beyond ``share`` of the tolerance or a cusp-speed limit."""
     return tuple(si for si, r in records.items() if r["traced"] and (
         not r["passed"] or max(r["max_deviation_replay_to_figure"], r["max_deviation_figure_to_replay"]) > share * tol
         or max(r["start_speed"], r["end_speed"]) > share * r["cusp_speed_limit"]))
