@@ -32,6 +32,8 @@ __all__ = [
     "mass_velocity",
     "mass_energy",
     "curvature_coefficients",
+    "curvature_terms",
+    "holding_rates",
     "singular_point",
 ]
 
@@ -186,11 +188,34 @@ def curvature_coefficients(params: SleighParams, kappa, p1, p2, a, b):
         ``c_a = m (M b + kappa (I + m a^2))``, ``c_b = m a (kappa m b - (M + m))``,
         ``c_0 = (M + m - kappa m b) p1 + (m b - kappa (I + m (a^2 + b^2))) p2``.
     """
-    M, m, I = params.M, params.m, params.I
+    return curvature_terms(params.M, params.m, params.I, kappa, p1, p2, a, b)
+
+
+def curvature_terms(M, m, I, kappa, p1, p2, a, b):
+    """:func:`curvature_coefficients` with the parameters as plain numbers.
+
+    Pure arithmetic, like :func:`body_velocities`, so that compiled code
+    (:mod:`skatetrace.tracing.leg_motion`) compiles this very function rather than a copy of its formulas.
+    """
     c_a = m * (M * b + kappa * (I + m * a * a))
     c_b = m * a * (kappa * m * b - (M + m))
     c_0 = (M + m - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
     return c_a, c_b, c_0
+
+
+def holding_rates(c_a, c_b, c_0, u):
+    """Control rates ``(adot, bdot, |c|)`` that hold the curvature whose condition has coefficients
+    ``c_a, c_b, c_0`` (:func:`curvature_coefficients`), for the free control ``u``.
+
+    ``u`` is the speed of the mass along ``n = (-c_b, c_a) / |c|``, which leaves the curvature
+    unchanged; the rest of the rates is along ``c``. Pure arithmetic, like :func:`curvature_terms`.
+    ``|c| = 0`` is the singular point.
+    """
+    n2 = c_a * c_a + c_b * c_b
+    n = np.sqrt(n2)
+    adot = -u * c_b / n - c_0 * c_a / n2
+    bdot = u * c_a / n - c_0 * c_b / n2
+    return adot, bdot, n
 
 
 def singular_point(params: SleighParams, kappa: float) -> tuple[float, float]:

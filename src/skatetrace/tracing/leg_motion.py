@@ -5,22 +5,26 @@ A leg's dense output (:class:`~skatetrace.dynamics.integrator.DenseSolution`) gi
 ``u`` (a ramp or an affine function of time) give the rates through the curvature condition
 (:func:`~skatetrace.tracing.maneuver.constrained_rates`). Sampling a planned section asks this of
 some forty legs at a time, a few hundred times, so for the ramps and affine controls of the
-tracer and the planner it is one compiled call (:func:`_motion`) with the same operations in the
-same order as the vectorised formulas, hence the same bits; other controls take those formulas.
+tracer and the planner it is one compiled call (:func:`_motion`): the integrator's own curvature
+and the model's own arithmetic (:func:`~skatetrace.dynamics.model.curvature_terms`,
+:func:`~skatetrace.dynamics.model.holding_rates`) compiled, hence the same bits as the vectorised
+formulas; other controls take those formulas.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
-from ..dynamics.integrator import DenseSolution, _evaluate_steps, integrate_legs
-from ..dynamics.model import SleighParams
+from ..dynamics.integrator import DenseSolution, _curvature, _evaluate_steps, integrate_legs
+from ..dynamics.model import SleighParams, curvature_terms, holding_rates
 from .maneuver import ManeuverSolution, constrained_rates
 
 __all__ = ["leg_motion", "load"]
+
+# the model's arithmetic itself, compiled (a zero |c|, the singular point, gives NaN as numpy does)
+_terms = njit(cache=True)(curvature_terms)
+_rates = njit(cache=True, error_model="numpy")(holding_rates)
 
 
 @njit(cache=True, error_model="numpy")
@@ -28,22 +32,13 @@ def _motion(M, m, I, t_old, h, y_old, F, ends, coefficients, s0, alpha, beta, af
     """Rows ``p1, p2, a, b, s, adot, bdot`` at times ``t``: the dense output, then the rates that hold the leg's
     curvature under ``u = alpha t`` (``+ beta`` where ``affine``), as :func:`constrained_rates` computes them."""
     y = _evaluate_steps(t_old, h, y_old, F, ends, t)
-    c0, c1, c2, c3 = coefficients[0], coefficients[1], coefficients[2], coefficients[3]
     out = np.empty((7, t.size))
     for p in range(t.size):
         p1, p2, a, b, s = y[p, 0], y[p, 1], y[p, 2], y[p, 3], y[p, 4]
-        sigma = abs(s) - s0
-        kappa = c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
         u = alpha * t[p] + beta if affine else alpha * t[p]
-        # model.curvature_coefficients and maneuver.constrained_rates, written out
-        c_a = m * (M * b + kappa * (I + m * a * a))
-        c_b = m * a * (kappa * m * b - (M + m))
-        c_0 = (M + m - kappa * m * b) * p1 + (m * b - kappa * (I + m * (a * a + b * b))) * p2
-        n2 = c_a * c_a + c_b * c_b
-        n = math.sqrt(n2)
+        c_a, c_b, c_0 = _terms(M, m, I, _curvature(coefficients, s0, s), p1, p2, a, b)
         out[0, p], out[1, p], out[2, p], out[3, p], out[4, p] = p1, p2, a, b, s
-        out[5, p] = -u * c_b / n - c_0 * c_a / n2
-        out[6, p] = u * c_a / n - c_0 * c_b / n2
+        out[5, p], out[6, p], _ = _rates(c_a, c_b, c_0, u)
     return out
 
 

@@ -42,7 +42,7 @@ import numpy as np
 from scipy.optimize import brentq, root
 
 from ..dynamics.integrator import DenseSolution, final_state, integrate_legs
-from ..dynamics.model import SleighParams, curvature_coefficients, velocities
+from ..dynamics.model import SleighParams, curvature_coefficients, holding_rates, velocities
 
 __all__ = ["Leg", "ManeuverSolution", "glide_state", "constrained_rates", "solve_stop"]
 
@@ -135,12 +135,7 @@ def constrained_rates(params: SleighParams, kappa, p1, p2, a, b, u):
 
     Vectorised. Returns ``(adot, bdot, |c|)``; ``|c| = 0`` is the singular point.
     """
-    c_a, c_b, c_0 = curvature_coefficients(params, kappa, p1, p2, a, b)
-    n2 = c_a * c_a + c_b * c_b
-    n = np.sqrt(n2)
-    adot = -u * c_b / n - c_0 * c_a / n2
-    bdot = u * c_a / n - c_0 * c_b / n2
-    return adot, bdot, n
+    return holding_rates(*curvature_coefficients(params, kappa, p1, p2, a, b), u)
 
 
 def _coefficients(kappa) -> tuple[float, float, float, float]:
