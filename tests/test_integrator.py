@@ -359,3 +359,109 @@ def test_load_leaves_the_integrator_compiled():
 
     integrator.load()
     assert integrator._run.signatures and integrator._evaluate_steps.signatures
+
+
+# ----------------------------------------------------------------------------------------------
+# Event location: the false position on the dense output (integrator._event_time)
+# ----------------------------------------------------------------------------------------------
+
+
+def _events(coef, alpha, switch, stop, sing, t_old, h, y_old, F, t):
+    """The three event functions at ``t`` on the step ``(t_old, h, y_old, F)``."""
+    from skatetrace.dynamics import dop853 as rk
+    from skatetrace.dynamics.integrator import _event_values
+
+    g, work = np.empty(3), np.empty(5)
+    y = rk.interpolate_into(t_old, h, y_old, F, t, np.empty(5))
+    _event_values(P.M, P.m, P.I, coef, 0.0, alpha, 0.0, t, y, switch, stop, sing, g, work)
+    return g
+
+
+def _located(coef, alpha, switch, stop, sing, e, t_old, h, y_old, F):
+    """``_event_time`` on the step, with the event functions at its two ends."""
+    from skatetrace.dynamics.integrator import _event_time
+
+    g0 = _events(coef, alpha, switch, stop, sing, t_old, h, y_old, F, t_old)[e]
+    g1 = _events(coef, alpha, switch, stop, sing, t_old, h, y_old, F, t_old + h)[e]
+    root, count = _event_time(P.M, P.m, P.I, coef, 0.0, alpha, 0.0, t_old, h, y_old, F, t_old + h, switch, stop,
+                              sing, e, g0, g1, np.empty(3), np.empty(5), np.empty(5))
+    return root, count, g0
+
+
+def _bisection_count(coef, alpha, switch, stop, sing, e, t_old, h, y_old, F, g0):
+    """How many evaluations a bisection down to adjacent floats takes on the same step."""
+    lo, hi, glo, count = t_old, t_old + h, g0, 0
+    while (mid := 0.5 * (lo + hi)) not in (lo, hi):
+        g = _events(coef, alpha, switch, stop, sing, t_old, h, y_old, F, mid)[e]
+        count += 1
+        if (g <= 0.0) == (glo <= 0.0) and g != 0.0:
+            lo, glo = mid, g
+        else:
+            hi = mid
+    return count
+
+
+def _is_sign_change(g_at, root, toward, g0):
+    """Whether the event is past at ``root`` and not yet at the float beside it towards the step's start."""
+    before = float(np.nextafter(root, toward))
+    g_root, g_before = g_at(root), g_at(before)
+    past = g_root == 0.0 or (g_root <= 0.0) != (g0 <= 0.0)
+    return past and (g_before <= 0.0) == (g0 <= 0.0) and g_before != 0.0
+
+
+@pytest.mark.parametrize("kappa,b,alpha,switch,stop,sing,event", [
+    (1 / 1.2, 0.3, -0.3, math.inf, True, 0.0, 1),  # the speed vanishing
+    (2.0, 0.1, -2.0, math.inf, True, 1e-3, 1),
+    (1 / 1.2, 0.3, 0.05, 1.0, False, 0.0, 0),  # a join
+    (0.5, 0.7, 0.2, 0.8, True, 0.01, 0),
+    (1.0, -1.45, -1.0, math.inf, False, 0.01, 2),  # the singular point's neighbourhood
+])
+@pytest.mark.parametrize("t_end", [20.0, -20.0])
+def test_events_are_located_to_adjacent_floats_in_few_evaluations(kappa, b, alpha, switch, stop, sing, event, t_end):
+    """The integration ends at a sign change between adjacent floats, found in a third of a bisection's evaluations."""
+    from skatetrace.dynamics.integrator import _run
+
+    coef = np.array([[kappa, 0.0, 0.0, 0.0]])
+    y0 = np.r_[glide_state(P, kappa, 0.0, b, 1.0), 0.0, b, 0.0]
+    out = _run(P.M, P.m, P.I, y0, coef, np.array([switch]), alpha, 0.0, t_end, RTOL, ATOL, stop, sing, 10**6, True)
+    status, t_hit, last = out[0], out[2], out[10] - 1
+    assert last >= 0 and status in (0, 1, 2)
+    t_old, h, y_old, F = out[5][last], out[6][last], out[7][last].copy(), out[8][last].copy()
+    assert t_old < t_hit <= t_old + h if t_end > 0 else t_old + h <= t_hit < t_old
+    args = (coef[0], alpha, switch, stop, sing)
+    root, count, g0 = _located(*args, event, t_old, h, y_old, F)
+    assert root == t_hit  # the integration ends where the locator says
+    assert _is_sign_change(lambda t: _events(*args, t_old, h, y_old, F, t)[event], root, t_old, g0)
+    bisection = _bisection_count(*args, event, t_old, h, y_old, F, g0)
+    assert bisection >= 40 and count <= bisection // 3
+
+
+def test_event_location_ends_at_adjacent_floats_on_any_interpolant():
+    """On dense outputs of random shape (several roots, flat stretches) the bracket still ends at a sign change."""
+    from skatetrace.dynamics.integrator import _FALSE_POSITION_STEPS
+
+    rng = np.random.default_rng(7)
+    coef, y_old = np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(5)
+    counts = []
+    for _ in range(300):
+        F = np.zeros((7, 5))
+        F[:, 4] = rng.standard_normal(7) * 10.0 ** rng.uniform(-3, 3, 7)
+        t_old, h = rng.uniform(-5, 5), rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-6, 1)
+        end = _events(coef, 0.0, 1.0, False, 0.0, t_old, h, y_old, F, t_old + h)[0] + 1.0  # |s| at the step's end
+        switch = end * rng.uniform(0.01, 0.99)
+        root, count, g0 = _located(coef, 0.0, switch, False, 0.0, 0, t_old, h, y_old, F)
+        assert _is_sign_change(lambda t: _events(coef, 0.0, switch, False, 0.0, t_old, h, y_old, F, t)[0],
+                               root, t_old, g0)
+        counts.append(count)
+    # the false position's share is bounded, and a bisection finishes what it leaves
+    assert max(counts) <= _FALSE_POSITION_STEPS + 64
+    assert np.median(counts) <= 12
+
+
+def test_an_event_exactly_at_a_float_is_found_there():
+    """Where the event function is exactly zero at a float the false position lands on, that float is the answer."""
+    F = np.zeros((7, 5))
+    F[0, 4] = 1.0  # |s| = x on the step [1, 2]: the join at |s| = 0.25 is t = 1.25 exactly
+    coef = np.array([1.0, 0.0, 0.0, 0.0])
+    root, count, g0 = _located(coef, 0.0, 0.25, False, 0.0, 0, 1.0, 1.0, np.zeros(5), F)
+    assert root == 1.25 and count <= 4

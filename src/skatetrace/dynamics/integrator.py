@@ -22,6 +22,10 @@ spirals) keeps the step size the previous leg proposed, which saves most of a re
 only ``kappa(s)`` (not its derivative) enters the right-hand side, the events and the step control.
 Two terminal events may be armed: the speed along the blade vanishing (``"stopped"``) and the mass
 coming within a distance of the singular point ``(0, -kappa(s) I / M)`` (``"singular"``).
+An event (or a join) is located on its step's dense output to adjacent floating-point numbers,
+as a bisection would, by the false position (:func:`_event_time`): some seven evaluations of the
+event functions where a bisection takes fifty (which was a third of the time of a manoeuvre solve's
+integrations).
 
 Set the environment variable ``NUMBA_DISABLE_JIT=1`` to run the same code as plain Python.
 """
@@ -134,6 +138,59 @@ def _event_values(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing
         g[2] = 1.0
 
 
+#: Evaluations of the event functions by the false position (:func:`_event_time`) before it gives way to bisection.
+_FALSE_POSITION_STEPS = 12
+
+
+@njit(cache=True)
+def _event_time(M, m, I, coef, s0, alpha, beta, t, h, y, F, t_new, switch, stop_event, sing_limit, e, g_start, g_end,
+                g, work, yint):
+    """Where event ``e`` changes sign on the step ``[t, t_new]``, to adjacent floating-point numbers.
+
+    The bracket ``[lo, hi]`` keeps ``g[e](lo)`` on the side of ``g_start`` (and nonzero, unless
+    ``lo`` is the step's start with ``g_start = 0``) and ``hi`` past it, as a bisection would, and
+    ends, as one does, where ``lo`` and ``hi`` are adjacent. Where the event function is monotone
+    on the step that is the bisection's answer, bit for bit; where rounding makes it change sign
+    more than once within a few ulps, either answer is such a pair. The points are the Illinois
+    variant of the false position on the dense output: some seven evaluations of the event
+    functions where a bisection takes fifty. Where the line meets zero at an end of the bracket
+    (to rounding) the point is the float beside that end, inside it; after
+    :data:`_FALSE_POSITION_STEPS` evaluations the rest is bisection.
+
+    Returns ``(time, evaluations)``: ``hi`` (``lo`` where ``g_start = 0``), and how many times the
+    event functions were evaluated.
+    """
+    lo, hi = t, t_new
+    glo = g_start
+    f_lo, f_hi = g_start, g_end  # the values the false position draws its line through
+    side = 0  # which end moved last: -1 lo, 1 hi (Illinois halves the other's value when one moves twice)
+    count = 0
+    for _ in range(4096):
+        mid = 0.5 * (lo + hi)
+        if mid == lo or mid == hi:
+            break
+        if count < _FALSE_POSITION_STEPS and f_lo * f_hi <= 0.0 and f_lo != f_hi:
+            x = lo + (hi - lo) * (f_lo / (f_lo - f_hi))
+            if not ((lo < x < hi) or (hi < x < lo)):
+                end, other = (lo, hi) if abs(x - lo) <= abs(x - hi) else (hi, lo)
+                x = np.nextafter(end, other)
+            mid = x
+        _event_values(M, m, I, coef, s0, alpha, beta, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
+                      stop_event, sing_limit, g, work)
+        count += 1
+        if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
+            lo, glo, f_lo = mid, g[e], g[e]
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+        else:
+            hi, f_hi = mid, g[e]
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+    return (hi if glo != 0.0 else lo), count
+
+
 @njit(cache=True)
 def _dense_coefficients(M, m, I, coef, s0, alpha, beta, t_old, h, y_old, y_new, f_new, K, Kx, ytmp, F):
     """The interpolant's coefficients ``F`` (7 x n) for the step just taken (3 extra stages).
@@ -216,7 +273,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_eve
     g_new = np.empty(3)
     g = np.empty(3)
     work = np.empty(n)  # scratch of the event functions
-    yint = np.empty(n)  # the dense output at a bisection point
+    yint = np.empty(n)  # the dense output where an event is looked for
     Kx = np.empty((16, n))  # scratch of the dense output's extra stages
     F_step = np.zeros((_POWER, n))  # the dense output of the current step, when it has one
     F_none = np.zeros((_POWER, n))  # stands for "no dense output" on steps that need none
@@ -311,20 +368,8 @@ def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_eve
                 for e in range(3):
                     if not ((g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0)):
                         continue
-                    # bisection on the dense output down to adjacent floating-point numbers
-                    lo, hi = t, t_new
-                    glo = g_old[e]
-                    for _ in range(200):
-                        mid = 0.5 * (lo + hi)
-                        if mid == lo or mid == hi:
-                            break
-                        _event_values(M, m, I, coef, s0, alpha, beta, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
-                                      stop_event, sing_limit, g, work)
-                        if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
-                            lo, glo = mid, g[e]
-                        else:
-                            hi = mid
-                    root = hi if glo != 0.0 else lo
+                    root, _count = _event_time(M, m, I, coef, s0, alpha, beta, t, h, y, F, t_new, switch,
+                                               stop_event, sing_limit, e, g_old[e], g_new[e], g, work, yint)
                     if hit < 0 or direction * (root - t_hit) < 0.0:
                         hit, t_hit = e, root
             if dense:
