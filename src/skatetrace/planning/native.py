@@ -123,25 +123,26 @@ def _build(fn: ca.Function, name: str, library: Path, cc: str) -> None:
         os.replace(out, library)
 
 
-def _upgrade(fn: ca.Function, name: str, library: Path, cc: str) -> subprocess.Popen | None:
-    """Compile ``fn`` with :data:`FLAGS` into ``library`` in a background process; None where none is started.
+def _upgrade(fn: ca.Function, name: str, library: Path, cc: str) -> bool:
+    """Compile ``fn`` with :data:`FLAGS` into ``library`` in a background job; whether one was started.
 
-    None where the library is there, another process is compiling it (its lock is taken), or
+    Not where the library is there, another process is compiling it (its lock is taken), or
     there is no shell to run the job. The job holds the lock (inherited) until it ends, renames
     its library into place where the compiler succeeds, and removes its folder. It runs at the
-    lowest priority for at most :data:`TIMEOUT`, ignores Ctrl-C, and may outlive this process (a
-    job killed leaves its folder, and the next plan for the skater starts another).
+    lowest priority for at most :data:`TIMEOUT`, ignores Ctrl-C, and outlives this process if it
+    must: the shell that starts it ends at once (waited for), so no child is left to this process
+    (a job killed leaves its folder, and the next plan for the skater starts another).
     """
     sh = shutil.which("sh")
     if fcntl is None or sh is None:  # pragma: no cover - not POSIX
-        return None
+        return False
     with open(library.parent / f"{name}.lock", "a+b") as lock:  # the job keeps its own copy, and the lock
         try:
             fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            return None  # compiling now, in another process
+            return False  # compiling now, in another process
         if library.exists():
-            return None
+            return False
         tmp = tempfile.mkdtemp(dir=library.parent)
         try:
             source = _generate(fn, name, tmp)
@@ -150,10 +151,12 @@ def _upgrade(fn: ca.Function, name: str, library: Path, cc: str) -> subprocess.P
             for prefix in (["timeout", str(int(TIMEOUT))], ["nice", "-n", "19"]):
                 if shutil.which(prefix[0]):
                     command = prefix + command
-            script = 'trap "" INT; "$@" && mv -f "$SKATETRACE_OUT" "$SKATETRACE_LIBRARY"; rm -rf "$SKATETRACE_TMP"'
+            job = '("$@" && mv -f "$SKATETRACE_OUT" "$SKATETRACE_LIBRARY"; rm -rf "$SKATETRACE_TMP")'
             env = dict(os.environ, SKATETRACE_OUT=str(out), SKATETRACE_LIBRARY=str(library), SKATETRACE_TMP=tmp)
-            return subprocess.Popen([sh, "-c", script, "sh", *command], env=env, pass_fds=(lock.fileno(),),
-                                    stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            subprocess.run([sh, "-c", f'trap "" INT; {job} &', "sh", *command], env=env, pass_fds=(lock.fileno(),),
+                           stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                           check=True, timeout=TIMEOUT)
+            return True
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
