@@ -1,5 +1,6 @@
 """Compiled CasADi functions: the same numbers as CasADi's virtual machine, cached, and never a failure."""
 
+import shutil
 import subprocess
 import time
 
@@ -242,3 +243,21 @@ def test_ctrl_c_while_compiling_stops_the_run_even_where_casadi_makes_it_an_erro
     monkeypatch.setattr(nat, "_build", lambda *a: (_ for _ in ()).throw(RuntimeError("no")))
     fn = _function()
     assert nat.native(fn) is fn
+
+
+@needs_cc
+def test_folders_left_by_killed_jobs_are_swept_when_a_job_starts(cache):
+    import os
+
+    folder = nat.cache_dir()
+    folder.mkdir(parents=True)
+    stale, fresh = folder / "tmpkilled", folder / "tmprunning"
+    for path in (stale, fresh):
+        path.mkdir()
+        (path / "st_x.c").write_text("/* a job's source */")
+    old = time.time() - nat.STALE - 60.0
+    os.utime(stale, (old, old))
+    nat.native(_function())  # starts a background job, which sweeps first
+    assert not stale.exists() and fresh.exists()  # a folder younger than STALE may be a running job's
+    shutil.rmtree(fresh)
+    assert len(_settled(cache)) == 2

@@ -40,6 +40,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import casadi as ca
@@ -61,6 +62,8 @@ FLAGS = ("-O1", "-ffp-contract=off", "-shared", "-fPIC")
 QUICK_FLAGS = ("-O0", "-ffp-contract=off", "-shared", "-fPIC")
 #: A compiler that takes longer than this is abandoned (the function stays interpreted).
 TIMEOUT = 120.0
+#: A job's folder older than this (seconds) is a job's that was killed before it could remove it.
+STALE = 3600.0
 
 
 def compiler() -> str | None:
@@ -123,6 +126,15 @@ def _build(fn: ca.Function, name: str, library: Path, cc: str) -> None:
         os.replace(out, library)
 
 
+def _sweep(folder: Path) -> None:
+    """Remove the folders killed jobs left in the cache, older than :data:`STALE`."""
+    now = time.time()
+    for path in folder.glob("tmp*"):
+        with contextlib.suppress(OSError):
+            if path.is_dir() and now - path.stat().st_mtime > STALE:
+                shutil.rmtree(path, ignore_errors=True)
+
+
 def _upgrade(fn: ca.Function, name: str, library: Path, cc: str) -> bool:
     """Compile ``fn`` with :data:`FLAGS` into ``library`` in a background job; whether one was started.
 
@@ -131,7 +143,8 @@ def _upgrade(fn: ca.Function, name: str, library: Path, cc: str) -> bool:
     its library into place where the compiler succeeds, and removes its folder. It runs at the
     lowest priority for at most :data:`TIMEOUT`, ignores Ctrl-C, and outlives this process if it
     must: the shell that starts it ends at once (waited for), so no child is left to this process
-    (a job killed leaves its folder, and the next plan for the skater starts another).
+    (a job killed leaves its folder, which a later job sweeps away, and the next plan for the skater
+    starts another).
     """
     sh = shutil.which("sh")
     if fcntl is None or sh is None:  # pragma: no cover - not POSIX
@@ -143,6 +156,7 @@ def _upgrade(fn: ca.Function, name: str, library: Path, cc: str) -> bool:
             return False  # compiling now, in another process
         if library.exists():
             return False
+        _sweep(library.parent)
         tmp = tempfile.mkdtemp(dir=library.parent)
         try:
             source = _generate(fn, name, tmp)
