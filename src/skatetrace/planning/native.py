@@ -28,7 +28,8 @@ would move.)
 
 Where there is no C compiler, the cache cannot be written, or compiling fails, the function is
 returned as it was and evaluated by CasADi's virtual machine: slower, never wrong (a damaged
-library is compiled again). ``SKATETRACE_NATIVE=0`` turns compiling off."""
+library is compiled again). ``SKATETRACE_NATIVE=0`` turns compiling off.
+"""
 
 from __future__ import annotations
 
