@@ -16,15 +16,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..dynamics.integrator import DenseSolution, _curvature, _evaluate_steps, integrate_legs
-from ..dynamics.model import SleighParams, curvature_terms, holding_rates
+from ..dynamics.integrator import DenseSolution, _curvature, _evaluate_steps, _rates, _terms, integrate_legs
+from ..dynamics.model import SleighParams
 from .maneuver import ManeuverSolution, constrained_rates
 
 __all__ = ["leg_motion", "load"]
-
-# the model's arithmetic itself, compiled (a zero |c|, the singular point, gives NaN as numpy does)
-_terms = njit(cache=True)(curvature_terms)
-_rates = njit(cache=True, error_model="numpy")(holding_rates)
 
 
 @njit(cache=True, error_model="numpy")
