@@ -465,3 +465,37 @@ def test_an_event_exactly_at_a_float_is_found_there():
     coef = np.array([1.0, 0.0, 0.0, 0.0])
     root, count, g0 = _located(coef, 0.0, 0.25, False, 0.0, 0, 1.0, 1.0, np.zeros(5), F)
     assert root == 1.25 and count <= 4
+
+
+_PLAIN_RUN = """
+import json
+from skatetrace import Curve, Figure, Join, PAPER_PARAMS, Segment, trace_figure, verify
+from skatetrace.verification.verify import schedule_from_trace
+fig = Figure("two arcs", (Curve((Segment(0.8, 1.1), Segment(-1.3, 0.7)), (Join("cusp", 0.4),)),), PAPER_PARAMS)
+trace = trace_figure(fig)
+schedule, _ = schedule_from_trace(trace)
+report = verify(trace, schedule)
+print(json.dumps({"traced": trace.success, "verified": report.success,
+                  "alphas": [ph.maneuver.params[0] for s in trace.sections for ph in s.phases if ph.maneuver]}))
+"""
+
+
+def test_the_same_code_runs_as_plain_python():
+    """``NUMBA_DISABLE_JIT=1`` runs the tracer and the replay uncompiled (a debugging aid), to the same answer."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    def run(disabled):
+        env = dict(os.environ, NUMBA_DISABLE_JIT="1" if disabled else "0")
+        done = subprocess.run([sys.executable, "-c", _PLAIN_RUN], env=env, capture_output=True, text=True,
+                              timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return json.loads(done.stdout.strip().splitlines()[-1])
+
+    compiled, plain = run(False), run(True)
+    assert compiled["traced"] and compiled["verified"]
+    assert plain["traced"] == compiled["traced"] and plain["verified"] == compiled["verified"]
+    # the same operations in the same order, but numpy's sums are pairwise where numba's loop is not
+    np.testing.assert_allclose(plain["alphas"], compiled["alphas"], rtol=1e-9)

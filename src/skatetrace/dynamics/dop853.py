@@ -71,8 +71,12 @@ def rms(x):
 
 
 def component(tol, i):
-    """``tol[i]`` of a tolerance per component, or ``tol`` itself where one number serves all (compiled only)."""
-    raise NotImplementedError("component is compiled: call it from a numba function")
+    """``tol[i]`` of a tolerance per component, or ``tol`` itself where one number serves all.
+
+    Compiled code takes the overload below, chosen by ``tol``'s type; this body serves the plain
+    Python run (``NUMBA_DISABLE_JIT=1``).
+    """
+    return tol[i] if np.ndim(tol) else tol
 
 
 @overload(component)
@@ -205,12 +209,17 @@ def combine(coef, K, count, y, h, out):
 def rhs(data, t, y, out):
     """The right-hand side :func:`integrate` calls: ``dy/dt`` at ``(t, y)`` into ``out``, for the system ``data``.
 
-    It has no body of its own: each system registers one (:func:`register`) for its own type of
-    ``data``, a named tuple of its numbers, arrays and scratch space; numba picks it by that type
-    when it compiles :func:`integrate` for the system. The open-loop replay
-    (:mod:`skatetrace.dynamics.replayer`) is one.
+    Each system registers its own (:func:`register`) for its own type of ``data``, a named tuple
+    of its numbers, arrays and scratch space; numba picks it by that type when it compiles
+    :func:`integrate` for the system. The open-loop replay (:mod:`skatetrace.dynamics.replayer`)
+    is one. Run as plain Python (``NUMBA_DISABLE_JIT=1``), this body calls the one registered on
+    ``data``'s class.
     """
-    raise NotImplementedError("rhs is compiled: each system registers its own (see register)")
+    try:
+        own = type(data).__dict__["_dop853_rhs"]
+    except KeyError:
+        raise TypeError(f"no right-hand side is registered for {type(data).__name__} (see register)") from None
+    return own(data, t, y, out)
 
 
 def register(system: type, fn) -> None:
@@ -222,6 +231,8 @@ def register(system: type, fn) -> None:
     stands. A call that passes the whole tuple instead made an evaluation of the open loop 30-40 %
     slower (measured: 80 ns against 105-117 ns).
     """
+    system._dop853_rhs = staticmethod(fn)  # for the plain Python run (see rhs)
+
     @overload(rhs, inline="always")
     def _rhs_of_system(data, t, y, out):
         if getattr(data, "instance_class", None) is system:
