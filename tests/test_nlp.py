@@ -2,10 +2,11 @@
 
 import casadi as ca
 import numpy as np
+import pytest
 
 import scipy.sparse as sps
 
-from skatetrace.planning.nlp import SparseProgram, _dm
+from skatetrace.planning.nlp import GiveUp, SparseProgram, _dm
 
 
 def _program(N: int = 5) -> SparseProgram:
@@ -125,3 +126,42 @@ def test_a_solve_finds_the_minimum_that_casadis_own_derivatives_find():
     assert own.stats()["success"]
     np.testing.assert_allclose(res.objective, float(sol["f"]), rtol=1e-8)
     np.testing.assert_allclose(res.x, np.array(sol["x"]).ravel(), atol=1e-6)
+
+
+def _stuck() -> SparseProgram:
+    # a program no x meets: IPOPT wanders (restoration phases) before it says so
+    prog = SparseProgram(2)
+    prog.constrain(prog.x[0] ** 2 + prog.x[1] ** 2, -2.0, -1.0)
+    prog.minimize((prog.x[0] - 1.0) ** 2 + prog.x[1] ** 2)
+    prog.x0[:] = 0.5
+    return prog
+
+
+_QUIET = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"}
+
+
+def test_give_up_refuses_a_rule_that_means_nothing():
+    for bad in ((0, 1e-3), (2.5, 1e-3), (True, 1e-3), (10, -1.0), (10, float("nan"))):
+        with pytest.raises(ValueError, match="GiveUp"):
+            GiveUp(*bad)
+
+
+def test_a_solve_that_goes_nowhere_is_given_up_after_its_iterations():
+    free = _stuck().solve(dict(_QUIET, **{"ipopt.max_iter": 200}))
+    assert not free.success and free.iterations > 8  # IPOPT alone takes longer to give up
+    res = _stuck().solve(dict(_QUIET, **{"ipopt.max_iter": 200}), GiveUp(5, 0.5))
+    assert not res.success and res.status == "Given_Up"
+    assert res.iterations <= 5
+    # the least violation met: x^2 + y^2 is never below -1, so never within 1 of its bound
+    assert res.stats["least_violation"] >= 1.0 - 1e-12
+
+
+def test_a_solve_the_rule_does_not_give_up_takes_the_same_path():
+    options = dict(_QUIET, **{"ipopt.tol": 1e-10})
+    plain = _program().solve(options)
+    for rule in (GiveUp(1, 1e9), GiveUp(3, 1e3)):
+        watched = _program().solve(options, rule)
+        assert watched.status == plain.status and watched.iterations == plain.iterations
+        np.testing.assert_array_equal(watched.x, plain.x)
+    # a start that violates the constraints is given up at once where nothing is allowed
+    assert _program().solve(options, GiveUp(1, 0.0)).status == "Given_Up"

@@ -471,9 +471,9 @@ def test_a_larger_linked_program_gets_fewer_iterations(monkeypatch):
     seen = []
     solve = nlp.SparseProgram.solve
 
-    def spy(self, options):
+    def spy(self, options, give_up=None):
         seen.append((options["ipopt.mu_init"], options["ipopt.max_iter"], self.n))
-        return solve(self, options)
+        return solve(self, options, give_up)
 
     monkeypatch.setattr(nlp.SparseProgram, "solve", spy)
     monkeypatch.setattr(planner, "_LINKED_BUDGET", 40 * 1000)
@@ -537,7 +537,7 @@ def test_a_curve_with_a_section_too_large_to_plan_solves_no_program_at_all(monke
     # too large to plan, which made the curve unplannable anyway (398 s in all, now 8 s)
     from skatetrace.planning import collocation
 
-    def no_solve(self, options):
+    def no_solve(self, options, give_up=None):
         raise AssertionError("no program of a curve that cannot be planned is solved")
 
     monkeypatch.setattr(collocation.SparseProgram, "solve", no_solve)
@@ -554,7 +554,7 @@ def test_a_solver_that_stops_with_an_error_is_a_failed_program_not_a_crash(monke
     reach then falls back to the launch-glide-stop manoeuvres."""
     from skatetrace.planning import collocation, nlp
 
-    def bad_alloc(self, options):
+    def bad_alloc(self, options, give_up=None):
         raise RuntimeError("Error in Function::call for 'plan' [IpoptInterface] at .../function.cpp:514:\n"
                            "std::bad_alloc")
 
@@ -985,3 +985,45 @@ def test_every_school_figure_is_small_enough_for_the_default_reach_to_plan():
     drawing = st.resolve(DATA / "svg-corpus" / "vivus-hi-there.svg", size="6m", tol="1mm").figure
     assert planner_figure_unknowns(drawing, None, options) > 5 * DEFAULT_PLAN_UNKNOWNS
     assert "pieces, more than 32: larger than a school figure" in too_large_to_plan(drawing, None, options)
+
+
+def test_a_warm_start_that_goes_nowhere_is_given_up_for_its_fallbacks(monkeypatch):
+    # svgpathtools-negative-scale at 6 m: one section's warm start, pinned at the cusps from the
+    # launch-glide-stop guess, stays some 1e-2 off its constraints and ran on to its 500 iterations
+    # (3.5 s) before it failed; the section then has a plan with free ends and is pinned again
+    # from it. Only that first warm start is watched: the programs from a plan are not.
+    from skatetrace.planning import planner
+    from skatetrace.planning.nlp import GiveUp
+    from skatetrace.planning.pool import spending
+
+    rule = planner._WARM_GIVE_UP
+    assert isinstance(rule, GiveUp) and rule.iterations >= 200 and rule.violation <= 1e-3
+    drawing = st.resolve(DATA / "svg-corpus" / "svgpathtools-negative-scale.svg", size="6m", tol="1mm").figure
+    seen = []
+
+    class Enough(Exception):
+        pass
+
+    def first_batch(jobs, workers, stage, **kw):
+        sols = solve(jobs, workers, stage, **kw)
+        seen.extend(zip(jobs, sols))
+        raise Enough  # the warm starts are all this test looks at
+
+    solve = planner.solve_programs
+    monkeypatch.setattr(planner, "solve_programs", first_batch)
+    with pytest.raises(Enough):
+        plan_figure(drawing, options=st.TraceOptions(speed=2.0, reach=0.288 * 1.7, workers=1))
+    assert len(seen) == 4 and all(job[1].give_up == rule and job[2] is None for job, _sol in seen)
+    given_up = [sol for _job, sol in seen if sol.status == "Given_Up"]
+    assert len(given_up) == 1 and not given_up[0].success
+    assert given_up[0].iterations <= rule.iterations and "given up after" in given_up[0].message
+    assert all(sol.success for _job, sol in seen if sol is not given_up[0])
+    # from a plan (pinned again), the linked options: no rule
+    spec, popts = seen[0][0][0][0], seen[0][0][1]
+    again = planner._warm_job(spec, popts, (0.1, 0.0), (0.1, 0.0), guess=given_up[0])
+    assert again[1].give_up is None and again[1].max_iter == planner._LINKED_ITER
+    # under a plan's budget (the command line's default reach) no warm start is watched
+    fresh = dataclasses.replace(popts, give_up=None)
+    with spending(10**9):
+        assert planner._warm_job(spec, fresh, (0.1, 0.0), (0.1, 0.0))[1].give_up is None
+    assert planner._warm_job(spec, fresh, (0.1, 0.0), (0.1, 0.0))[1].give_up == rule

@@ -206,3 +206,13 @@ def test_a_budget_must_be_a_whole_number_of_units(bad):
             pass
     with pytest.raises(ValueError, match="plan_budget must be a whole number"):
         st.TraceOptions(reach=1.0, plan_budget=bad)
+
+
+def test_a_block_with_a_limit_is_a_budget_and_one_without_is_not():
+    assert not pool.budgeted()
+    with pool.spending(None):
+        assert not pool.budgeted()
+        with pool.spending(5):
+            assert pool.budgeted()
+        assert not pool.budgeted()
+    assert not pool.budgeted()

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from .nlp import SparseProgram
+from .nlp import GiveUp, SparseProgram
 from ..processes import recording_interrupts
 from .symbolic import sleigh_functions
 
@@ -115,7 +115,8 @@ class ProgramOptions:
     iterations, the single sections about 200, and a program that runs to 1000 costs minutes);
     ``iteration_budget``, if given, caps the iterations at that many over the number of unknowns
     (at least ``max_iter`` / 4, and never above ``max_iter``), as IPOPT's cost an iteration
-    grows with the program.
+    grows with the program. ``give_up`` (a :class:`~skatetrace.planning.nlp.GiveUp`, optional)
+    ends a solve that is going nowhere: a program it gives up fails with status ``"Given_Up"``.
     """
 
     M: float
@@ -142,6 +143,7 @@ class ProgramOptions:
     mu_init: float = 0.1
     max_iter: int = 500
     iteration_budget: int | None = None
+    give_up: GiveUp | None = None
     print_level: int = 0
 
     def iterations_for(self, n: int) -> int:
@@ -422,9 +424,12 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     res = prog.solve({"print_time": False, "error_on_fail": False, "ipopt.print_level": o.print_level,
                       "ipopt.sb": "yes", "ipopt.mu_strategy": o.barrier, "ipopt.mu_init": o.mu_init,
                       "ipopt.max_iter": o.iterations_for(n) if max_work is None else
-                      min(o.iterations_for(n), max_work // max(n, 1) + 1), "ipopt.tol": o.tol})
+                      min(o.iterations_for(n), max_work // max(n, 1) + 1), "ipopt.tol": o.tol}, o.give_up)
     ok, status = res.success, res.status
     message = status.replace("_", " ").lower()
+    if status == "Given_Up":
+        message = (f"given up after {res.iterations} iterations: the constraints were never met within "
+                   f"{o.give_up.violation:.3g} (at best {res.stats['least_violation']:.3g})")
     if not ok and status in _STALLED:
         # A feasible point where IPOPT could not prove optimality (one-foot eight: the constraints
         # met to 5e-13, the step computation failing on degenerate multipliers) is a plan: the

@@ -28,7 +28,66 @@ from .blas import one_thread
 from .heap import padded
 from .native import native
 
-__all__ = ["SparseProgram", "ProgramResult"]
+__all__ = ["SparseProgram", "ProgramResult", "GiveUp"]
+
+
+@dataclass(frozen=True, slots=True)
+class GiveUp:
+    """When a solve is given up as going nowhere: once IPOPT has made ``iterations`` iterations
+    and the least constraint violation it has met (the largest ``lbg - g`` or ``g - ubg``) is
+    still above ``violation``.
+
+    Checked at every iteration (restoration phases included) by an iteration callback that only
+    reads the iterate: a solve that is not given up takes the same path, to the bit.
+    """
+
+    iterations: int
+    violation: float
+
+    def __post_init__(self):
+        if isinstance(self.iterations, bool) or not isinstance(self.iterations, int) or self.iterations < 1:
+            raise ValueError(f"GiveUp.iterations must be a whole number >= 1, got {self.iterations!r}")
+        if not self.violation >= 0.0:  # also refuses NaN
+            raise ValueError(f"GiveUp.violation must be >= 0, got {self.violation!r}")
+
+
+class _Watch(ca.Callback):
+    """IPOPT's iteration callback for a :class:`GiveUp`: counts the iterations, keeps the least
+    constraint violation, and asks IPOPT to stop once the rule says so."""
+
+    def __init__(self, rule: GiveUp, nx: int, lbg: np.ndarray, ubg: np.ndarray):
+        ca.Callback.__init__(self)
+        self.rule, self.nx, self.lbg, self.ubg = rule, nx, lbg, ubg
+        self.count, self.least, self.stopped = 0, np.inf, False
+        self.construct("give_up_watch", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "stop"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        size = {"f": 1, "x": self.nx, "lam_x": self.nx, "g": self.lbg.size, "lam_g": self.lbg.size}.get(name, 0)
+        return ca.Sparsity.dense(size) if size else ca.Sparsity(0, 0)
+
+    def eval(self, arg):
+        self.count += 1
+        if self.lbg.size:
+            g = np.asarray(arg[2]).ravel()
+            worst = max(float(np.max(self.lbg - g)), float(np.max(g - self.ubg)), 0.0)
+            self.least = min(self.least, worst)
+        else:
+            self.least = 0.0
+        self.stopped = self.count >= self.rule.iterations and self.least > self.rule.violation
+        return [1 if self.stopped else 0]
 
 
 @dataclass(frozen=True, slots=True)
@@ -298,15 +357,22 @@ class SparseProgram:
         sparsity = ca.Sparsity.triplet(self.n, self.n, (keys % self.n).tolist(), (keys // self.n).tolist())
         return ca.MX(sparsity, values)
 
-    def solve(self, options: dict) -> ProgramResult:
-        """Solve with IPOPT (``options`` are nlpsol options, e.g. ``ipopt.tol``). Never raises for a failed solve."""
+    def solve(self, options: dict, give_up: GiveUp | None = None) -> ProgramResult:
+        """Solve with IPOPT (``options`` are nlpsol options, e.g. ``ipopt.tol``). Never raises for a failed solve.
+
+        With ``give_up``, a solve that the rule gives up ends with status ``"Given_Up"`` (not a
+        success), ``stats["least_violation"]`` the least constraint violation it met.
+        """
         nlp, derivatives = self._functions()
         opts = dict(options)
         opts.setdefault("error_on_fail", False)
         opts.update(derivatives)
-        solver = ca.nlpsol("plan", "ipopt", nlp, opts)
         lbg = np.concatenate(self._lbg) if self._lbg else np.zeros(0)
         ubg = np.concatenate(self._ubg) if self._ubg else np.zeros(0)
+        watch = None if give_up is None else _Watch(give_up, self.n, lbg, ubg)
+        if watch is not None:
+            opts["iteration_callback"] = watch
+        solver = ca.nlpsol("plan", "ipopt", nlp, opts)
         with recording_interrupts() as caught, one_thread(), padded():  # (see planning.blas and planning.heap)
             sol = solver(x0=self.x0, lbx=self.lbx, ubx=self.ubx, lbg=lbg, ubg=ubg)
         if caught:
@@ -314,8 +380,11 @@ class SparseProgram:
             # would carry on with the next program: the user asked to stop
             raise KeyboardInterrupt
         stats = solver.stats()
-        return ProgramResult(success=bool(stats.get("success", False)), status=str(stats.get("return_status", "unknown")),
-                             x=np.asarray(sol["x"]).ravel(), objective=float(sol["f"]),
+        status, success = str(stats.get("return_status", "unknown")), bool(stats.get("success", False))
+        if watch is not None and watch.stopped:
+            status, success = "Given_Up", False
+            stats = dict(stats, least_violation=watch.least)
+        return ProgramResult(success=success, status=status, x=np.asarray(sol["x"]).ravel(), objective=float(sol["f"]),
                              iterations=int(stats.get("iter_count", 0)), stats=stats)
 
 

@@ -44,7 +44,8 @@ from ..tracing.sections import FigureTrace, SectionTrace, TraceOptions, TraceSta
 from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec, program_too_large, program_unknowns
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
-from .pool import BudgetSpent, solve_programs, spending
+from .nlp import GiveUp
+from .pool import BudgetSpent, budgeted, solve_programs, spending
 
 __all__ = ["plan_figure", "curve_specs", "figure_unknowns", "DURATION_PER_LENGTH", "TOP_SPEED"]
 
@@ -113,9 +114,7 @@ def _program_options(params: SleighParams, options: TraceOptions) -> ProgramOpti
 
 #: A section planned on its own gets at most this many IPOPT iterations over its unknowns (and at
 #: most 500): the school figures' sections (at most 2,560 unknowns) keep their 500; a drawing's
-#: section of 9,200 (the most a program may have) gets 166, where 500 took minutes. (Before the
-#: collocation's end states were merged with its nodes the same meshes counted 1.31 times the
-#: unknowns, and this was 2,000,000: the caps are the same.)
+#: section of 9,200 (the most a program may have) gets 166, where 500 took minutes.
 _SECTION_BUDGET = 1_530_000
 
 
@@ -171,12 +170,24 @@ def _warm_options(popts: ProgramOptions, start, end) -> ProgramOptions:
     return dataclasses.replace(popts, start_position=start, end_position=end, closing_turn=None)
 
 
+#: A warm start from the launch-glide-stop guess still 1e-3 off its constraints after 200 IPOPT
+#: iterations is given up for its fallbacks (free ends, then pinned again). Of 325 warm starts
+#: (the school figures at 1.5-2.0 m, 57 drawings) those that converged were within 2e-5 by then;
+#: those it gives up failed after 352-500 (negative-scale with --reach: 9.2 -> 5.6 s, the same
+#: plan). Not under a plan's budget: the work saved went to later programs run one at a time, and
+#: plans that spent the budget took longer (bootstrap-align-top 3.8 -> 5.8 s; ``bench/GAPS.md``).
+_WARM_GIVE_UP = GiveUp(200, 1e-3)
+
+
 def _warm_job(spec: SectionSpec, popts: ProgramOptions, start, end, guess: ProgramSolution | None = None) -> tuple:
     """The warm-start program of one section, pinned at ``start``/``end`` (None: free), as a job of
-    :func:`~skatetrace.planning.pool.solve_programs`; from ``guess`` (a free plan pulled onto the pins)."""
+    :func:`~skatetrace.planning.pool.solve_programs`; from ``guess`` (a free plan pulled onto the pins).
+    From the launch-glide-stop guess and outside a budget, given up where it goes nowhere (:data:`_WARM_GIVE_UP`)."""
     opts = _warm_options(popts, start, end)
     if guess is not None:
         opts = _linked_options(opts)
+    elif not budgeted():
+        opts = dataclasses.replace(opts, give_up=_WARM_GIVE_UP)
     return [dataclasses.replace(spec, turn=0.0)], opts, guess, None if guess is None else guess.meshes
 
 
@@ -336,35 +347,28 @@ def smallest_reach(spec: SectionSpec, popts: ProgramOptions) -> float | None:
 #: :mod:`skatetrace.planning.mesh`) that a plan whose exact finish stalls is refined to.
 _MESH_TOL = 1e-5
 #: The linked program starts from a feasible chain (the warm start): a small barrier parameter
-#: takes a third to a half fewer iterations (circle eight 38 against 137), and a program that has
-#: not converged in this many iterations is left for the chain (or kept where its last iterate is
-#: feasible). The school figures' linked programs converge in 17 to 104 iterations within 0.5 m
-#: (2026-11-28; 18 to 85, their units 20 to 67, before session 54); one that does not crawls: a
-#: drawing's curve of 16 sections (bootstrap-bezier2, 15,935 unknowns as counted then) was still
-#: lowering its effort by 0.1 % per ten iterations under a Hessian regularisation of 1e2 to 1e3 at
-#: 300 iterations, which took 88 s.
+#: takes a third to a half fewer iterations (circle eight 38 against 137; 1e-5 and 1e-6 did worse
+#: over the school figures at 1.7 and 1.9 m, 2026-11-29), and a program that has not converged in
+#: this many iterations is left for the chain (or kept where its last iterate is feasible). The
+#: school figures' converge in 17 to 104 within 0.5 m; one that does not crawls (bootstrap-bezier2's
+#: curve of 16 sections still lowered its effort by 0.1 % per ten iterations at 300, after 88 s).
 _LINKED_MU = 1e-4
 _LINKED_ITER = 150
 #: A larger linked program gets fewer iterations: at most this many over its unknowns (and at
-#: least a quarter of ``_LINKED_ITER``). IPOPT's time an iteration grows with the program (45 ms
-#: at 4,500 unknowns, 250 ms at 16,000, as counted before the collocation's end states were
-#: merged with its nodes, when this was 750,000), and a drawing's big program spends most of its
-#: iterations crawling: fontawesome-feather's curve of 7 sections (16,190 unknowns then) lowered
-#: its effort from 124 to 51 in 46 iterations and to 45 in 150 (37 s), where it still had not
-#: converged; the whole drawing took 87 s, and 39 s with the budget. The school figures' linked
-#: programs (at most 3,860 unknowns, 104 iterations) are not touched.
+#: least a quarter of ``_LINKED_ITER``). IPOPT's time an iteration grows with the program, and a
+#: drawing's big program spends most of its iterations crawling: fontawesome-feather's curve of 7
+#: sections lowered its effort from 124 to 51 in 46 iterations and to 45 in 150 (37 s), still not
+#: converged. The school figures' (at most 3,860 unknowns, 104 iterations) are not touched.
 _LINKED_BUDGET = 575_000
 #: Within a plan's budget (:func:`~skatetrace.planning.pool.spending`) the linked programs, which
 #: only improve the chain, spend at most this share of what the warm starts left (a drawing's ran
-#: on to 0.75 million of the default 1 million, and nothing was left to finish the chain with);
-#: the school figures' use at most 0.63 of it (the paragraph double three, 414,000 of 658,000;
-#: both in the counts before the collocation's end states were merged with its nodes).
+#: on until nothing was left to finish the chain with); the school figures' use at most 0.63 of it.
 _LINKED_SHARE = 0.75
 
 
 def _linked_options(popts: ProgramOptions) -> ProgramOptions:
     return dataclasses.replace(popts, barrier="monotone", mu_init=_LINKED_MU, max_iter=_LINKED_ITER,
-                               iteration_budget=_LINKED_BUDGET)
+                               iteration_budget=_LINKED_BUDGET, give_up=None)  # it starts from a plan
 
 
 def _same_turn(x: float, y: float) -> bool:

@@ -28,7 +28,7 @@ from ..processes import DEFAULT_MAX_WORKERS, available_workers, run_jobs
 from ..progress import Channel
 from .collocation import ProgramSolution, solve_program
 
-__all__ = ["available_workers", "solve_programs", "reporting", "spending", "BudgetSpent", "WorkBudget",
+__all__ = ["available_workers", "solve_programs", "reporting", "spending", "budgeted", "BudgetSpent", "WorkBudget",
            "DEFAULT_MAX_WORKERS"]
 
 # The planner's batches, program by program (see reporting).
@@ -86,6 +86,11 @@ def spending(limit: int | None) -> Iterator[WorkBudget | None]:
         yield budget
     finally:
         _BUDGET.reset(token)
+
+
+def budgeted() -> bool:
+    """Whether the programs solved here count against the budget of a :func:`spending` block (one with a limit)."""
+    return _BUDGET.get() is not None
 
 
 def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractContextManager[None]:
