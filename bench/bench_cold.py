@@ -1,6 +1,6 @@
 """Benchmark: school figures and example drawings from a cold CLI start, as multiples of the double flower (issue 18).
 
-Run: python bench/bench_cold.py [NAME ...] [--timeout S] [--flower-runs K]
+Run: python bench/bench_cold.py [NAME ...] [--timeout S] [--flower-runs K] [--heights H ...] [--corpus]
 
 Each command runs as a user runs it, in a fresh interpreter: ``skatetrace trace FIGURE ...
 --no-plots --no-viewer`` into an empty folder, with the default planner (``--reach auto`` for a
@@ -11,6 +11,10 @@ time, its ratio to the double flower's, the exit code, the verdict line, and the
 resident memory (``VmHWM`` of its main process, read every 20 ms; the planner's and the tracer's
 worker processes are not counted). A command still running after ``--timeout`` seconds is
 stopped and reported as such (its ratio is at least the timeout's). Nothing is asserted about time.
+
+``--heights H ...`` and ``--corpus`` add figures that no default was tuned on: every school
+figure for skaters of those heights, and every drawing of ``tests/data/svg-corpus`` at 6 m within
+1 mm; the last line counts the commands within issue 18's 5x.
 """
 
 from __future__ import annotations
@@ -34,14 +38,31 @@ from measure_examples import EXAMPLES, ROOT  # noqa: E402
 from skatetrace import school_names  # noqa: E402
 
 FLOWER = ["double-flower"]
+#: Issue 18's target: every command within this many times the double flower's cold time.
+TARGET_RATIO = 5.0
+#: Drawings no default was tuned for (``--corpus``), traced as the command line's examples are.
+CORPUS = ROOT / "tests" / "data" / "svg-corpus"
 
 
-def commands() -> dict[str, list[str]]:
-    """Every measured command's arguments after ``skatetrace trace``, by name (the double flower excluded)."""
+def commands(heights=(), corpus: bool = False) -> dict[str, list[str]]:
+    """Every measured command's arguments after ``skatetrace trace``, by name (the double flower excluded).
+
+    By default the school figures of a 1.7 m skater and the example drawings, issue 18's targets.
+    ``heights`` adds every school figure for a skater of each of those heights
+    (``school:NAME@H``), and ``corpus`` every drawing of ``tests/data/svg-corpus`` scaled to 6 m
+    within 1 mm (``corpus:FILE``): figures that no default of the planner or the tracer was tuned
+    on, as a user's would be.
+    """
     out = {f"school:{name}": [f"school:{name}", "--height", "1.7"] for name in school_names()}
     for name, (args, _what) in EXAMPLES.items():
         if args != FLOWER and not args[0].startswith("school:"):
             out[name] = list(args)
+    for height in heights:
+        for name in school_names():
+            out[f"school:{name}@{height:g}"] = [f"school:{name}", "--height", f"{height:g}"]
+    if corpus:
+        for path in sorted(CORPUS.glob("*.svg")):
+            out[f"corpus:{path.name}"] = [str(path.relative_to(ROOT)), "--size", "6m", "--tol", "1mm"]
     return out
 
 
@@ -96,8 +117,12 @@ def main(argv=None) -> dict:
     ap.add_argument("names", nargs="*", help="school:NAME or an example of bench/measure_examples.py (default: all)")
     ap.add_argument("--timeout", type=float, default=300.0, help="seconds before a command is stopped (default 300)")
     ap.add_argument("--flower-runs", type=int, default=3, help="cold runs of the double flower (default 3)")
+    ap.add_argument("--heights", type=float, nargs="+", default=(), metavar="H",
+                    help="also every school figure for a skater this tall (m): school:NAME@H")
+    ap.add_argument("--corpus", action="store_true",
+                    help="also every drawing of tests/data/svg-corpus at --size 6m --tol 1mm: corpus:FILE")
     args = ap.parse_args(argv)
-    every = commands()
+    every = commands(args.heights, args.corpus)
     unknown = [n for n in args.names if n not in every]
     if unknown:
         ap.error(f"unknown name(s) {', '.join(unknown)}; choose from {', '.join(every)}")
@@ -113,6 +138,10 @@ def main(argv=None) -> dict:
         state = "TIMED OUT" if r["timed_out"] else f"exit {r['returncode']}"
         print(f"{name:28s} {r['wall']:7.2f} s {r['ratio']:4.1f}x  peak {r['peak_mb']:6.0f} MB  {state}  "
               f"{r['verdict'][:70]}", flush=True)
+    ran = [r for r in rows if r["returncode"] == 0 or r["timed_out"]]
+    within = [r for r in ran if not r["timed_out"] and r["ratio"] <= TARGET_RATIO]
+    print(f"within {TARGET_RATIO:g}x the double flower: {len(within)} of {len(ran)} commands that ran to the end or "
+          f"timed out ({len(rows) - len(ran)} refused their input)")
     return {"flower": {"wall": [r["wall"] for r in flower], "wall_median": base,
                        "peak_mb": max(r["peak_mb"] for r in flower), "returncodes": [r["returncode"] for r in flower]},
             "rows": rows, "timeout": args.timeout}

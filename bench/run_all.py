@@ -90,7 +90,7 @@ LINEAR_SLOPE = 1.1  # "linear": log-log slope over sizes >= 10 at most this
 PLAN_S = 10.0  # issue 15: each school figure planned (and traced and verified) within this, warm
 ARC_S = 0.5e-3  # issue 18: a single arc traced warm
 THOUSAND_S = 1.0  # issue 18: 1000 distinct arcs traced warm
-COLD_RATIO = 5.0  # issue 18: every school figure and example drawing from a cold start, as multiples of the flower's
+COLD_RATIO = bench_cold.TARGET_RATIO  # issue 18: every school figure and example drawing, cold, against the flower
 FLOWER_MB = 300.0  # issue 18: the double flower's peak memory
 
 

@@ -169,6 +169,12 @@ def test_bench_cold_times_each_command_against_the_flower_and_stops_one_past_its
 
     assert {f"school:{n}" for n in school_names()} <= set(every)
     assert {"serpentine-exact", "points-eight-exact", "three-turn-svg"} <= set(every) and "double-flower" not in every
+    # figures no default was tuned on: other skaters' school figures, the corpus's drawings
+    more = bench.commands((1.5, 1.9), corpus=True)
+    assert set(every) < set(more) and more["school:three@1.9"] == ["school:three", "--height", "1.9"]
+    drawings = {k: v for k, v in more.items() if k.startswith("corpus:")}
+    assert len(drawings) == len(list(bench.CORPUS.glob("*.svg"))) > 50
+    assert all((bench.ROOT / v[0]).is_file() and v[1:] == ["--size", "6m", "--tol", "1mm"] for v in drawings.values())
     out = bench.main(["flower-with-stems", "--flower-runs", "1"])
     (row,) = out["rows"]
     assert out["flower"]["returncodes"] == [0] and row["returncode"] == 0 and not row["timed_out"]
@@ -180,7 +186,8 @@ def test_bench_cold_times_each_command_against_the_flower_and_stops_one_past_its
     assert row["verdict"].startswith("verified")
     stopped = bench.main(["school:three", "--flower-runs", "1", "--timeout", "0.2"])
     assert stopped["rows"][0]["timed_out"] and stopped["rows"][0]["returncode"] is None
-    assert "TIMED OUT" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "TIMED OUT" in printed and "within 5x the double flower: 0 of 1 commands" in printed
 
 
 def test_bench_planning_on_the_paper_arc(capsys):
