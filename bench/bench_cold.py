@@ -136,7 +136,7 @@ def main(argv=None) -> dict:
         r.update(name=name, ratio=r["wall"] / base)
         rows.append(r)
         state = "TIMED OUT" if r["timed_out"] else f"exit {r['returncode']}"
-        print(f"{name:28s} {r['wall']:7.2f} s {r['ratio']:4.1f}x  peak {r['peak_mb']:6.0f} MB  {state}  "
+        print(f"{name:28s} {r['wall']:7.2f} s {r['ratio']:5.2f}x  peak {r['peak_mb']:6.0f} MB  {state}  "
               f"{r['verdict'][:70]}", flush=True)
     ran = [r for r in rows if r["returncode"] == 0 or r["timed_out"]]
     within = [r for r in ran if not r["timed_out"] and r["ratio"] <= TARGET_RATIO]
