@@ -208,11 +208,19 @@ def test_a_budget_must_be_a_whole_number_of_units(bad):
         st.TraceOptions(reach=1.0, plan_budget=bad)
 
 
-def test_a_block_with_a_limit_is_a_budget_and_one_without_is_not():
-    assert not pool.budgeted()
-    with pool.spending(None):
-        assert not pool.budgeted()
-        with pool.spending(5):
-            assert pool.budgeted()
-        assert not pool.budgeted()
-    assert not pool.budgeted()
+def test_a_budget_counts_a_program_given_up_at_the_iterations_it_was_allowed():
+    # the rule that gives up a warm start going nowhere saves time, not budget: the budget decides
+    # as it would have with the program run on to its cap
+    from skatetrace.planning.collocation import ProgramSolution
+
+    ran = ProgramSolution(success=False, status="Maximum_Iterations_Exceeded", message="", iterations=500,
+                          unknowns=700, allowed=500)
+    given_up = ProgramSolution(success=False, status="Given_Up", message="", iterations=195, unknowns=700, allowed=500)
+    converged = ProgramSolution(success=True, status="Solve_Succeeded", message="", iterations=60, unknowns=700,
+                                allowed=500)
+    assert ran.work == given_up.work == 350_000 and converged.work == 42_000
+    budget = pool.WorkBudget(380_000)  # 195 x 700 would leave room for the next; 500 x 700 does not
+    budget.charge(given_up)
+    assert budget.spent == 350_000
+    with pytest.raises(pool.BudgetSpent):
+        budget.charge(converged)

@@ -158,7 +158,8 @@ class ProgramSolution:
     """IPOPT's answer: per section the node times, states and controls, and the solver's report.
 
     ``iterations`` are IPOPT's and ``unknowns`` the program's size (both 0 where no solve ran):
-    their product is the work a plan's budget counts (:func:`skatetrace.planning.pool.spending`).
+    their product is the work a plan's budget counts (:func:`skatetrace.planning.pool.spending`;
+    see :attr:`work`). ``allowed`` is the iterations IPOPT was allowed (its ``max_iter``).
     """
 
     success: bool
@@ -172,6 +173,18 @@ class ProgramSolution:
     unknowns: int = 0
     meshes: tuple = ()
     stats: dict = field(default_factory=dict)
+    allowed: int = 0
+
+    @property
+    def work(self) -> int:
+        """What a plan's budget counts: iterations times unknowns; a program given up as going
+        nowhere (``"Given_Up"``) at the iterations it was allowed, as if it had run on to them.
+
+        So the rule that gives it up (:class:`~skatetrace.planning.nlp.GiveUp`) saves time and
+        leaves the budget's decisions as they were where the program would have failed at its
+        cap; where it would have failed sooner (IPOPT proving it infeasible), the budget counts more.
+        """
+        return int(self.allowed if self.status == "Given_Up" else self.iterations) * int(self.unknowns)
 
 
 def _guess_profile(length: float, duration: float):
@@ -421,10 +434,10 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     # 33 ms an iteration against 50 ms, but changed IPOPT's path on every figure, and the plans it
     # found were worse where it mattered (the paragraph double three peaked at 187 m/s^2 against 46;
     # the circle eight's warm start took 284 iterations, both programs 240 before).
+    allowed = o.iterations_for(n) if max_work is None else min(o.iterations_for(n), max_work // max(n, 1) + 1)
     res = prog.solve({"print_time": False, "error_on_fail": False, "ipopt.print_level": o.print_level,
                       "ipopt.sb": "yes", "ipopt.mu_strategy": o.barrier, "ipopt.mu_init": o.mu_init,
-                      "ipopt.max_iter": o.iterations_for(n) if max_work is None else
-                      min(o.iterations_for(n), max_work // max(n, 1) + 1), "ipopt.tol": o.tol}, o.give_up)
+                      "ipopt.max_iter": allowed, "ipopt.tol": o.tol}, o.give_up)
     ok, status = res.success, res.status
     message = status.replace("_", " ").lower()
     if status == "Given_Up":
@@ -456,7 +469,7 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     return ProgramSolution(success=ok, status=status, message=message,
                            times=tuple(times), states=tuple(states), controls=tuple(controls),
                            meshes=tuple(tuple(lay.nodes for lay in lays) for *_, lays in layout),
-                           objective=res.objective, iterations=res.iterations, unknowns=n,
+                           objective=res.objective, iterations=res.iterations, unknowns=n, allowed=allowed,
                            stats={k: res.stats[k] for k in ("t_wall_total",) if k in res.stats})
 
 

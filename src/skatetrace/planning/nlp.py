@@ -53,7 +53,7 @@ class GiveUp:
 
 class _Watch(ca.Callback):
     """IPOPT's iteration callback for a :class:`GiveUp`: counts the iterations, keeps the least
-    constraint violation, and asks IPOPT to stop once the rule says so."""
+    constraint violation (until it is within the rule's), and asks IPOPT to stop once the rule says so."""
 
     def __init__(self, rule: GiveUp, nx: int, lbg: np.ndarray, ubg: np.ndarray):
         ca.Callback.__init__(self)
@@ -80,13 +80,14 @@ class _Watch(ca.Callback):
 
     def eval(self, arg):
         self.count += 1
-        if self.lbg.size:
-            g = np.asarray(arg[2]).ravel()
-            worst = max(float(np.max(self.lbg - g)), float(np.max(g - self.ubg)), 0.0)
-            self.least = min(self.least, worst)
-        else:
-            self.least = 0.0
-        self.stopped = self.count >= self.rule.iterations and self.least > self.rule.violation
+        if self.least > self.rule.violation:  # else the rule can no longer give the solve up
+            if self.lbg.size:
+                g = np.asarray(arg[2]).ravel()
+                worst = max(float(np.max(self.lbg - g)), float(np.max(g - self.ubg)), 0.0)
+                self.least = min(self.least, worst)
+            else:
+                self.least = 0.0
+            self.stopped = self.count >= self.rule.iterations and self.least > self.rule.violation
         return [1 if self.stopped else 0]
 
 

@@ -45,7 +45,7 @@ from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
 from .nlp import GiveUp
-from .pool import BudgetSpent, budgeted, solve_programs, spending
+from .pool import BudgetSpent, solve_programs, spending
 
 __all__ = ["plan_figure", "curve_specs", "figure_unknowns", "DURATION_PER_LENGTH", "TOP_SPEED"]
 
@@ -174,20 +174,17 @@ def _warm_options(popts: ProgramOptions, start, end) -> ProgramOptions:
 #: iterations is given up for its fallbacks (free ends, then pinned again). Of 325 warm starts
 #: (the school figures at 1.5-2.0 m, 57 drawings) those that converged were within 2e-5 by then;
 #: those it gives up failed after 352-500 (negative-scale with --reach: 9.2 -> 5.6 s, the same
-#: plan). Not under a plan's budget: the work saved went to later programs run one at a time, and
-#: plans that spent the budget took longer (bootstrap-align-top 3.8 -> 5.8 s; ``bench/GAPS.md``).
+#: plan). A plan's budget counts it at its cap (``ProgramSolution.work``): counted as run, the work
+#: saved went to later programs, one at a time, and plans that spent the budget took longer.
 _WARM_GIVE_UP = GiveUp(200, 1e-3)
 
 
 def _warm_job(spec: SectionSpec, popts: ProgramOptions, start, end, guess: ProgramSolution | None = None) -> tuple:
     """The warm-start program of one section, pinned at ``start``/``end`` (None: free), as a job of
     :func:`~skatetrace.planning.pool.solve_programs`; from ``guess`` (a free plan pulled onto the pins).
-    From the launch-glide-stop guess and outside a budget, given up where it goes nowhere (:data:`_WARM_GIVE_UP`)."""
+    From the launch-glide-stop guess it is given up where it goes nowhere (:data:`_WARM_GIVE_UP`)."""
     opts = _warm_options(popts, start, end)
-    if guess is not None:
-        opts = _linked_options(opts)
-    elif not budgeted():
-        opts = dataclasses.replace(opts, give_up=_WARM_GIVE_UP)
+    opts = _linked_options(opts) if guess is not None else dataclasses.replace(opts, give_up=_WARM_GIVE_UP)
     return [dataclasses.replace(spec, turn=0.0)], opts, guess, None if guess is None else guess.meshes
 
 

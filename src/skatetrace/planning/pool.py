@@ -28,7 +28,7 @@ from ..processes import DEFAULT_MAX_WORKERS, available_workers, run_jobs
 from ..progress import Channel
 from .collocation import ProgramSolution, solve_program
 
-__all__ = ["available_workers", "solve_programs", "reporting", "spending", "budgeted", "BudgetSpent", "WorkBudget",
+__all__ = ["available_workers", "solve_programs", "reporting", "spending", "BudgetSpent", "WorkBudget",
            "DEFAULT_MAX_WORKERS"]
 
 # The planner's batches, program by program (see reporting).
@@ -46,7 +46,7 @@ class WorkBudget:
     """The IPOPT work a plan may spend (``limit``), and what its programs have spent so far.
 
     A program's work is its iterations times its unknowns
-    (:attr:`~skatetrace.planning.collocation.ProgramSolution.unknowns`): IPOPT's time grows with
+    (:attr:`~skatetrace.planning.collocation.ProgramSolution.work`): IPOPT's time grows with
     both, some 6 to 12 us a unit on one core of this project's 2-core machine (the time an
     iteration grows with the program's size).
     """
@@ -57,7 +57,7 @@ class WorkBudget:
 
     def charge(self, sol: ProgramSolution) -> None:
         """Count ``sol``'s work; raise :class:`BudgetSpent` once the total is over the limit."""
-        self.spent += int(sol.iterations) * int(sol.unknowns)
+        self.spent += sol.work
         self.programs += 1
         if self.spent > self.limit:
             raise BudgetSpent(f"the planning budget of {self.limit:,} (IPOPT iterations x unknowns) was spent after "
@@ -86,11 +86,6 @@ def spending(limit: int | None) -> Iterator[WorkBudget | None]:
         yield budget
     finally:
         _BUDGET.reset(token)
-
-
-def budgeted() -> bool:
-    """Whether the programs solved here count against the budget of a :func:`spending` block (one with a limit)."""
-    return _BUDGET.get() is not None
 
 
 def reporting(report: Callable[[str, int, int], None]) -> contextlib.AbstractContextManager[None]:
