@@ -411,6 +411,36 @@ def test_a_linked_program_out_of_iterations_is_finished_from_its_last_iterate(mo
     assert chain.success and all(max(sec.residuals.values()) <= 1e-10 for sec in chain.sections)
 
 
+def test_a_last_iterate_is_finished_no_further_than_its_first_failed_section(monkeypatch):
+    # The last iterate is kept only whole: once a section fails, the sections after it are not
+    # finished (on heroicons' paper airplane the first failed, and the four after it cost 0.6 s).
+    from skatetrace.planning import planner
+
+    real_finish, real_unconverged = planner.finish_section, planner._unconverged
+    inside, strides = [False], []
+
+    def failing(*args, **kwargs):
+        fin = real_finish(*args, **kwargs)
+        if inside[0]:
+            strides.append(kwargs["stride"])
+            return dataclasses.replace(fin, success=False)
+        return fin
+
+    def spy(*args, **kwargs):
+        inside[0] = True
+        try:
+            return real_unconverged(*args, **kwargs)
+        finally:
+            inside[0] = False
+
+    monkeypatch.setattr(planner, "finish_section", failing)
+    monkeypatch.setattr(planner, "_unconverged", spy)
+    monkeypatch.setattr(planner, "_LINKED_ITER", 15)  # out of iterations, as in the test above
+    trace = plan_figure(st.school_figure("loop", height=1.7), options=st.TraceOptions(reach=0.5, speed=2.0))
+    assert strides == list(planner._STRIDES)  # the first section, at every stride; not the second
+    assert len(trace.sections) == 2 and all(sec.success for sec in trace.sections)  # the chain, mended
+
+
 def test_a_chains_replan_solves_each_distinct_program_once_side_by_side(monkeypatch):
     # feather-settings' chain of 39 sections was planned again section by section, one after
     # another, 114 programs; the same program (pieces, pins, guess, mesh) is now solved once

@@ -502,7 +502,7 @@ def _unconverged(candidate: ProgramSolution, specs, sections, ci, params, option
     of a converged plan; else None, and the chain is the plan.
     """
     traces = _finish_curve(candidate, ("start",) + ("impulse",) * (len(specs) - 1), specs, sections, ci, params,
-                           options, fn)
+                           options, fn, whole=True)
     return traces if all(tr.success for tr in traces) else None
 
 
@@ -677,12 +677,13 @@ _MARGIN_ROUNDS = 3
 _STRIDES = (2, 1)
 
 
-def _finish_curve(plan, links, specs, sections, ci, params, options, fn) -> list[SectionTrace]:
+def _finish_curve(plan, links, specs, sections, ci, params, options, fn, whole: bool = False) -> list[SectionTrace]:
     """Each section of a planned curve (``plan``: a successful one) finished exactly from the exact end of the one before.
 
     ``links[k]`` says how section ``k`` meets the one before: ``"start"`` (a curve's first
     section), ``"continuous"`` (the mass's position and velocity carried on), ``"impulse"`` (its
-    position carried on, its velocity as planned) or ``"jump"`` (both as planned).
+    position carried on, its velocity as planned) or ``"jump"`` (both as planned). With
+    ``whole`` (a caller that keeps the curve only whole), the sections end with the first that fails.
     """
     out = []
     arrived = None  # the exact end of the previous section, in this section's frame
@@ -706,6 +707,8 @@ def _finish_curve(plan, links, specs, sections, ci, params, options, fn) -> list
         out.append(_section_trace(fin, sec, ci, params, options, spec, _link_metrics(kind, arrived, start, params,
                                                                                      options)))
         arrived = fin.end if fin.success else None
+        if whole and not out[-1].success:
+            break  # heroicons' paper airplane: 0.87 -> 0.27 s on a last iterate whose first section fails
     return out
 
 
