@@ -1,5 +1,6 @@
 """Independent programs solved side by side: the same answers as one after another, and never lost."""
 
+import os
 import threading
 from concurrent.futures.process import BrokenProcessPool
 
@@ -224,3 +225,40 @@ def test_a_budget_counts_a_program_given_up_at_the_iterations_it_was_allowed():
     assert budget.spent == 350_000
     with pytest.raises(pool.BudgetSpent):
         budget.charge(converged)
+
+
+def test_programs_charged_in_order_spend_a_budget_side_by_side_as_one_after_another(jobs, serial, monkeypatch):
+    # Side by side, each item's programs run from the budget as it stood at the start, and a later
+    # item's may run on past the cap it would have had in order; they are charged in order, each at
+    # the work it would have done: the same items kept, the budget spent at the same program, to the unit
+    from threadpoolctl import threadpool_info
+
+    monkeypatch.setattr(pool, "can_fork", lambda: True)
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
+    first, second = (_work(s) for s in serial)
+
+    def solved(k):
+        sol = pool.solve_programs([jobs[k]], workers=1)[0]
+        threads = {info["num_threads"] for info in threadpool_info() if info["user_api"] == "blas"}
+        return os.getpid(), sol.iterations, threads
+
+    for limit in (first + second, first + second // 2, first // 2):
+        outcomes = []
+        for workers in (1, 2):
+            with pool.spending(limit) as budget:
+                results, why = pool.charged_in_order(solved, [0, 1], workers)
+            assert all(threads == {1} for _pid, _it, threads in results)  # numpy's BLAS on one thread
+            if workers == 2 and len(results) == 2:
+                assert results[1][0] != os.getpid()  # the second item ran in a child
+            outcomes.append(([it for _pid, it, _t in results], why, budget.spent, budget.programs))
+        assert outcomes[0] == outcomes[1]
+        kept, why, spent, programs = outcomes[0]
+        if limit == first + second:
+            assert kept == [s.iterations for s in serial] and why is None and spent == limit
+        else:
+            assert spent > limit and why == (f"the planning budget of {limit:,} (IPOPT iterations x unknowns) was "
+                                             f"spent after {programs} program{'s' * (programs > 1)} ({spent:,})")
+            assert kept == ([serial[0].iterations] if limit > first else [])
+    # without a budget nothing is counted, and every item is kept
+    results, why = pool.charged_in_order(solved, [0, 1], 2)
+    assert why is None and [it for _pid, it, _t in results] == [s.iterations for s in serial]

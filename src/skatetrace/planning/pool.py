@@ -21,15 +21,21 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple, TypeVar
 
-from ..processes import DEFAULT_MAX_WORKERS, available_workers, run_jobs
+from threadpoolctl import threadpool_limits
+
+from ..processes import DEFAULT_MAX_WORKERS, available_workers, can_fork, map_forked, run_jobs, worker_count
 from ..progress import Channel
 from .collocation import ProgramSolution, solve_program
 
-__all__ = ["available_workers", "solve_programs", "reporting", "spending", "BudgetSpent", "WorkBudget",
-           "DEFAULT_MAX_WORKERS"]
+__all__ = ["available_workers", "solve_programs", "charged_in_order", "reporting", "spending", "BudgetSpent",
+           "WorkBudget", "DEFAULT_MAX_WORKERS"]
+
+J = TypeVar("J")
+R = TypeVar("R")
 
 # The planner's batches, program by program (see reporting).
 _PROGRESS = Channel("planning")
@@ -41,6 +47,17 @@ class BudgetSpent(Exception):
     """Raised by :func:`solve_programs` once the programs solved within a :func:`spending` block have spent its budget."""
 
 
+class _Charge(NamedTuple):
+    """A program's work as charged, with what its cap came from: the ``number`` of its batch, the
+    batch's ``share`` of the budget and its ``size`` (:func:`solve_programs`)."""
+
+    work: int
+    unknowns: int
+    batch: int
+    share: float
+    size: int
+
+
 @dataclass(slots=True)
 class WorkBudget:
     """The IPOPT work a plan may spend (``limit``), and what its programs have spent so far.
@@ -48,20 +65,35 @@ class WorkBudget:
     A program's work is its iterations times its unknowns
     (:attr:`~skatetrace.planning.collocation.ProgramSolution.work`): IPOPT's time grows with
     both, some 6 to 12 us a unit on one core of this project's 2-core machine (the time an
-    iteration grows with the program's size).
+    iteration grows with the program's size). ``charges`` lists every program charged, where
+    recorded (:func:`charged_in_order`); ``batches`` counts the batches begun.
     """
 
     limit: int
     spent: int = 0
     programs: int = 0
+    charges: list[_Charge] | None = None
+    batches: int = 0
 
-    def charge(self, sol: ProgramSolution) -> None:
-        """Count ``sol``'s work; raise :class:`BudgetSpent` once the total is over the limit."""
-        self.spent += sol.work
+    def charge(self, sol: ProgramSolution, share: float = 1.0, size: int = 1) -> None:
+        """Count ``sol``'s work (solved in a batch of ``size`` with ``share``); raise :class:`BudgetSpent` once
+        the total is over the limit."""
+        if self.charges is not None:
+            self.charges.append(_Charge(sol.work, sol.unknowns, self.batches, share, size))
+        self.add(sol.work)
+
+    def add(self, work: int) -> None:
+        """Count a program of ``work``; raise :class:`BudgetSpent` once the total is over the limit."""
+        self.spent += work
         self.programs += 1
         if self.spent > self.limit:
             raise BudgetSpent(f"the planning budget of {self.limit:,} (IPOPT iterations x unknowns) was spent after "
                               f"{self.programs} program{'' if self.programs == 1 else 's'} ({self.spent:,})")
+
+    def cap(self, share: float = 1.0, size: int = 1) -> int:
+        """The work each program of a batch of ``size`` with ``share`` may do from here (:func:`solve_programs`)."""
+        left = self.limit - self.spent
+        return int(share * left) // max(size, 1) if share < 1.0 else left
 
 
 @contextlib.contextmanager
@@ -142,9 +174,9 @@ def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "
         raise BudgetSpent(f"the planning budget of {budget.limit:,} was spent before this batch")
     # each program stops where it alone would spend what is left (past it the budget is spent
     # anyway), or its part of the batch's share of it
-    left = None if budget is None else budget.limit - budget.spent
-    if left is not None and share < 1.0:
-        left = int(share * left) // max(len(jobs), 1)
+    left = None if budget is None else budget.cap(share, len(jobs))
+    if budget is not None:
+        budget.batches += 1
     out = []
     solved = run_jobs(_solve, [(*job, left) for job in jobs], workers)
     try:
@@ -152,7 +184,78 @@ def solve_programs(jobs: list[tuple], workers: int | None = None, stage: str = "
             out.append(sol)
             _PROGRESS.report(stage, len(out), len(jobs))
             if budget is not None:
-                budget.charge(sol)
+                budget.charge(sol, share, len(jobs))
     finally:
         solved.close()  # where the budget ran out: the jobs not started are dropped, the workers ended
     return out
+
+
+def charged_in_order(fn: Callable[[J], R], items: Sequence[J],
+                     workers: int | None = None) -> tuple[list[R], str | None]:
+    """``fn`` on every item side by side, the programs it solves charged to the budget as one after another.
+
+    Each ``fn(item)`` may solve programs (:func:`solve_programs`) within the :func:`spending`
+    block around the call. The items run in forked processes (:func:`~skatetrace.processes.map_forked`),
+    each from the budget as it stands now, and their programs are then charged in the order of
+    the items, each at the work it would have done had the items before it spent theirs first:
+    where its batch's cap (:meth:`WorkBudget.cap`) would have stopped it sooner, at that cap, and
+    the budget is then spent where it would have been. A program's iterations do not depend on a
+    cap that does not stop it, so the items kept are the same, to the bit, as one after another.
+
+    Returns
+    -------
+    results, spent : list, str or None
+        The results of the items before the one in which the budget runs out (all, without a
+        budget or where it does not), and why it ran out (:class:`BudgetSpent`'s message) or None.
+        With one worker, one item, or where forking is not safe, the items run here one after
+        another, and none after the one in which the budget runs out.
+
+    Notes
+    -----
+    numpy's and scipy's BLAS run on one thread meanwhile, side by side or not (the answers then
+    do not depend on the cores either): each starts a thread per core, which wait spinning, and
+    two processes with two each on two cores made svgpathtools-groups' exact finishes ten times
+    slower (5 s -> 52 s in all).
+    """
+    with threadpool_limits(1, user_api="blas"):
+        return _charged_in_order(fn, items, workers)
+
+
+def _charged_in_order(fn: Callable[[J], R], items: Sequence[J], workers: int | None) -> tuple[list[R], str | None]:
+    budget = _BUDGET.get()
+    if budget is None:
+        return map_forked(fn, items, workers), None
+    out: list[R] = []
+    if worker_count(len(items), workers) <= 1 or not can_fork():
+        for item in items:
+            try:
+                out.append(fn(item))
+            except BudgetSpent as exc:
+                return out, str(exc)
+        return out, None
+    start = (budget.limit, budget.spent, budget.programs)
+
+    def recorded(item):
+        own = WorkBudget(*start, charges=[])
+        token = _BUDGET.set(own)
+        try:
+            return fn(item), own.charges, None
+        except BudgetSpent as exc:
+            return None, own.charges, str(exc)
+        finally:
+            _BUDGET.reset(token)
+
+    for result, charges, ran_out in map_forked(recorded, items, workers):
+        batch, cap = None, 0
+        try:
+            for c in charges:
+                if c.batch != batch:
+                    batch, cap = c.batch, budget.cap(c.share, c.size)
+                # stopped at the cap, a program has done one iteration more than the cap allows
+                budget.add(min(c.work, (cap // c.unknowns + 1) * c.unknowns) if c.unknowns else c.work)
+        except BudgetSpent as exc:
+            return out, str(exc)
+        if ran_out is not None:  # raised by the item itself, not by its programs' work
+            return out, ran_out
+        out.append(result)
+    return out, None
