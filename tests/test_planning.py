@@ -846,11 +846,38 @@ def test_a_budget_spent_while_a_later_curve_is_mended_keeps_the_curves_finished_
         return real(*args)
 
     monkeypatch.setattr(planner, "_mended", spent_on_the_second_curve)
-    trace = plan_figure(_pivot_and_arc(), options=st.TraceOptions(reach=1.0, reach_hint=False, plan_budget=10**12))
+    # one after another (side by side, the curves' programs are charged in the same order: test_pool)
+    options = st.TraceOptions(reach=1.0, reach_hint=False, plan_budget=10**12, workers=1)
+    trace = plan_figure(_pivot_and_arc(), options=options)
     assert calls == [0, 1]
     first, second, arc = trace.sections
     assert first.success and second.success
     assert arc.status is st.TraceStatus.OVER_BUDGET and "was spent after 9 programs" in arc.message
+
+
+def test_curves_finished_side_by_side_are_the_ones_finished_one_after_another(monkeypatch):
+    # each curve's finish and mending run in a process of its own, the same bits as one after another
+    from skatetrace.planning import pool
+
+    forked = []
+    real = pool.map_forked
+
+    def spy(fn, items, workers=None):
+        forked.append(len(items))
+        return real(fn, items, workers)
+
+    monkeypatch.setattr(pool, "map_forked", spy)
+    monkeypatch.setattr(pool, "can_fork", lambda: True)
+    fig = _pivot_and_arc()
+    one, two = (plan_figure(fig, options=st.TraceOptions(reach=1.0, reach_hint=False, plan_budget=10**12,
+                                                          workers=w)) for w in (1, 2))
+    assert forked == [2] and one.success and two.success and len(one.sections) == len(two.sections) == 3
+    for a, b in zip(one.sections, two.sections):
+        assert a.residuals == b.residuals and a.metrics == b.metrics
+        t = np.linspace(0.0, a.duration, 51)
+        va, vb = a.evaluate(t, geometry=False), b.evaluate(t, geometry=False)
+        for key in ("a", "b", "xi2"):
+            np.testing.assert_array_equal(va[key], vb[key])
 
 
 def test_the_default_reach_keeps_the_launch_glide_stop_trace_where_the_plan_spends_its_budget():

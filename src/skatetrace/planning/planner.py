@@ -45,7 +45,7 @@ from .collocation import PieceSpec, ProgramOptions, ProgramSolution, SectionSpec
 from .finish import RestState, finish_section
 from .mesh import interval_errors, refined
 from .nlp import GiveUp
-from .pool import BudgetSpent, solve_programs, spending
+from .pool import BudgetSpent, charged_in_order, solve_programs, spending
 
 __all__ = ["plan_figure", "curve_specs", "figure_unknowns", "DURATION_PER_LENGTH", "TOP_SPEED"]
 
@@ -590,8 +590,14 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
         stop = next((f"reach {options.reach:.4g}: not planned: section {bad} of curve {ci} has no motion within the "
                      "reach (all or nothing)" for ci, (plan, bad, *_rest) in enumerate(plans) if plan is None),
                     None) if options.all_or_nothing and spent is None else None
-        for ci, (curve, plan) in enumerate(zip(curves, plans)):
-            curve_traces, spent = _planned_curve(curve, plan, ci, params, options, fn, stop, spent)
+        # the curves side by side, their programs charged in order: the same as one after another
+        done, spent = ([], spent) if spent is not None else charged_in_order(
+            lambda ci: _planned_curve(curves[ci], plans[ci], ci, params, options, fn, stop), range(len(curves)),
+            options.workers)
+        for ci, (specs, sections, _opts) in enumerate(curves):
+            curve_traces = done[ci] if ci < len(done) else [
+                _failed(sec, ci, params, options, TraceStatus.OVER_BUDGET, f"reach {options.reach:.4g}: not planned: "
+                        f"{spent}") for sec in sections]
             for tr in curve_traces:
                 traces.append(tr)
                 starts.append(t)
@@ -601,40 +607,28 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
     return FigureTrace(figure=figure, params=params, options=options, sections=tuple(traces), start_times=tuple(starts))
 
 
-def _planned_curve(curve, entry, ci, params, options, fn, stop: str | None, spent: str | None
-                   ) -> tuple[list[SectionTrace], str | None]:
-    """A curve of :func:`plan_figure` finished (``entry``: its entry of :func:`_plan_curves`), and why the budget is spent.
+def _planned_curve(curve, entry, ci, params, options, fn, stop: str | None) -> list[SectionTrace]:
+    """A curve of :func:`plan_figure` finished (``entry``: its entry of :func:`_plan_curves`).
 
-    ``stop`` says why no curve is finished (all or nothing), ``spent`` why the budget stopped the
-    planning (every section of this curve is then ``OVER_BUDGET``), if either did.
+    ``stop`` says why no curve is finished (all or nothing), if anything does. Raises
+    :class:`~skatetrace.planning.pool.BudgetSpent` where its programs spend the plan's budget.
     """
     (specs, sections, curve_opts), (plan, bad, links, linked, candidate) = curve, entry
-    curve_traces = None
-    if spent is None:
-        try:
-            if stop is not None and plan is not None:
-                curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
-            elif plan is None:
-                curve_traces = _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
-            else:
-                curve_traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params,
-                                                                           options, fn)
-                if curve_traces is None:
-                    curve_traces = _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
-        except BudgetSpent as exc:
-            spent = str(exc)
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-            # A plan whose exact motion diverges can reach numbers that the finish or the mesh
-            # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
-            # the default reach, vivus-hi-there). The curve is reported as not planned, with the
-            # error, and the other curves are still planned (the command line then falls back to
-            # the launch-glide-stop manoeuvres), instead of the whole run ending in a traceback.
-            why = f"reach {options.reach:.4g}: the planner failed on this curve ({type(exc).__name__}: {exc})"
-            curve_traces = [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, why) for sec in sections]
-    if spent is not None:
-        curve_traces = [_failed(sec, ci, params, options, TraceStatus.OVER_BUDGET,
-                                f"reach {options.reach:.4g}: not planned: {spent}") for sec in sections]
-    return curve_traces, spent
+    try:
+        if stop is not None and plan is not None:
+            return [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, stop) for sec in sections]
+        if plan is None:
+            return _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
+        traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params, options, fn)
+        return traces or _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        # A plan whose exact motion diverges can reach numbers that the finish or the mesh
+        # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
+        # the default reach, vivus-hi-there). The curve is reported as not planned, with the
+        # error, and the other curves are still planned (the command line then falls back to
+        # the launch-glide-stop manoeuvres), instead of the whole run ending in a traceback.
+        why = f"reach {options.reach:.4g}: the planner failed on this curve ({type(exc).__name__}: {exc})"
+        return [_failed(sec, ci, params, options, TraceStatus.NOT_PLANNED, why) for sec in sections]
 
 
 def _mended(plan, links, linked, specs, sections, ci, params, options, popts, fn) -> list[SectionTrace]:
