@@ -262,3 +262,29 @@ def test_programs_charged_in_order_spend_a_budget_side_by_side_as_one_after_anot
     # without a budget nothing is counted, and every item is kept
     results, why = pool.charged_in_order(solved, [0, 1], 2)
     assert why is None and [it for _pid, it, _t in results] == [s.iterations for s in serial]
+
+
+def test_a_program_that_a_share_of_the_budget_would_have_stopped_is_solved_again_in_order(jobs, serial, monkeypatch):
+    # A batch with a share of the budget stops its programs without spending it (the planner's
+    # linked programs): had the second item's program been stopped in order, the item would have
+    # gone on from an unsolved program, so the item is solved again here, one after another
+    monkeypatch.setattr(pool, "can_fork", lambda: True)
+    monkeypatch.setattr(processes, "can_fork", lambda: True)
+    first, second = (_work(s) for s in serial)
+    n = serial[1].unknowns
+
+    def solved(k):
+        sol = pool.solve_programs([jobs[k]], workers=1, share=1.0 if k == 0 else 0.5)[0]
+        return sol.status, sol.iterations
+
+    limit = 2 * second + first - 4 * n  # alone, half of it is enough for the second; after the first, not
+    assert 0.5 * limit >= second and first >= 4 * n
+    outcomes = []
+    for workers in (1, 2):
+        with pool.spending(limit) as budget:
+            outcomes.append((pool.charged_in_order(solved, [0, 1], workers), budget.spent, budget.programs))
+    assert outcomes[0] == outcomes[1]
+    (results, why), spent, programs = outcomes[0]
+    assert why is None and programs == 2 and spent <= limit
+    assert results == [(serial[0].status, serial[0].iterations), ("Maximum_Iterations_Exceeded",
+                                                                  serial[1].iterations - 1)]

@@ -48,8 +48,8 @@ class BudgetSpent(Exception):
 
 
 class _Charge(NamedTuple):
-    """A program's work as charged, with what its cap came from: the ``number`` of its batch, the
-    batch's ``share`` of the budget and its ``size`` (:func:`solve_programs`)."""
+    """A program's work as charged, with what its cap came from: its ``batch`` (a count of the
+    batches begun), the batch's ``share`` of the budget and its ``size`` (:func:`solve_programs`)."""
 
     work: int
     unknowns: int
@@ -201,6 +201,9 @@ def charged_in_order(fn: Callable[[J], R], items: Sequence[J],
     where its batch's cap (:meth:`WorkBudget.cap`) would have stopped it sooner, at that cap, and
     the budget is then spent where it would have been. A program's iterations do not depend on a
     cap that does not stop it, so the items kept are the same, to the bit, as one after another.
+    Where a program that its batch's share of the budget would have stopped (leaving the budget
+    unspent, :func:`solve_programs`) ran on, that item and those after it are run again here, one
+    after another.
 
     Returns
     -------
@@ -225,14 +228,8 @@ def _charged_in_order(fn: Callable[[J], R], items: Sequence[J], workers: int | N
     budget = _BUDGET.get()
     if budget is None:
         return map_forked(fn, items, workers), None
-    out: list[R] = []
     if worker_count(len(items), workers) <= 1 or not can_fork():
-        for item in items:
-            try:
-                out.append(fn(item))
-            except BudgetSpent as exc:
-                return out, str(exc)
-        return out, None
+        return _one_after_another(fn, items, [])
     start = (budget.limit, budget.spent, budget.programs)
 
     def recorded(item):
@@ -245,17 +242,34 @@ def _charged_in_order(fn: Callable[[J], R], items: Sequence[J], workers: int | N
         finally:
             _BUDGET.reset(token)
 
-    for result, charges, ran_out in map_forked(recorded, items, workers):
-        batch, cap = None, 0
+    out: list[R] = []
+    for k, (result, charges, ran_out) in enumerate(map_forked(recorded, items, workers)):
+        batch, cap, before = None, 0, (budget.spent, budget.programs)
         try:
             for c in charges:
                 if c.batch != batch:
                     batch, cap = c.batch, budget.cap(c.share, c.size)
                 # stopped at the cap, a program has done one iteration more than the cap allows
-                budget.add(min(c.work, (cap // c.unknowns + 1) * c.unknowns) if c.unknowns else c.work)
+                capped = (cap // c.unknowns + 1) * c.unknowns if c.unknowns else c.work
+                if c.work > capped and c.share < 1.0:
+                    # stopped by a share of the budget, the program would have been left unsolved
+                    # with the budget not spent, and the item gone on from there: solved again here
+                    budget.spent, budget.programs = before
+                    return _one_after_another(fn, items[k:], out)
+                budget.add(min(c.work, capped))
         except BudgetSpent as exc:
             return out, str(exc)
         if ran_out is not None:  # raised by the item itself, not by its programs' work
             return out, ran_out
         out.append(result)
+    return out, None
+
+
+def _one_after_another(fn: Callable[[J], R], items: Sequence[J], out: list[R]) -> tuple[list[R], str | None]:
+    """``out`` and ``fn`` on each item in turn, charged to the budget as they go, up to the one that spends it."""
+    for item in items:
+        try:
+            out.append(fn(item))
+        except BudgetSpent as exc:
+            return out, str(exc)
     return out, None
