@@ -594,10 +594,10 @@ def plan_figure(figure: Figure, params: SleighParams | None = None, options: Tra
         done, spent = ([], spent) if spent is not None else charged_in_order(
             lambda ci: _planned_curve(curves[ci], plans[ci], ci, params, options, fn, stop), range(len(curves)),
             options.workers)
-        for ci, (specs, sections, _opts) in enumerate(curves):
+        for ci, (_specs, sections, _opts) in enumerate(curves):
             curve_traces = done[ci] if ci < len(done) else [
                 failed(sec, ci, params, options, TraceStatus.OVER_BUDGET, f"reach {options.reach:.4g}: not planned: "
-                        f"{spent}") for sec in sections]
+                       f"{spent}") for sec in sections]
             for tr in curve_traces:
                 traces.append(tr)
                 starts.append(t)
@@ -620,7 +620,9 @@ def _planned_curve(curve, entry, ci, params, options, fn, stop: str | None) -> l
         if plan is None:
             return _infeasible_curve(specs, sections, bad, ci, params, options, curve_opts)
         traces = None if candidate is None else _unconverged(candidate, specs, sections, ci, params, options, fn)
-        return traces or _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
+        if traces is not None:
+            return traces
+        return _mended(plan, links, linked, specs, sections, ci, params, options, curve_opts, fn)
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         # A plan whose exact motion diverges can reach numbers that the finish or the mesh
         # refinement refuse (an infinite defect raised OverflowError on a corpus drawing under
@@ -717,7 +719,7 @@ def _finish_curve(plan, links, specs, sections, ci, params, options, fn, whole: 
                 fin = again
                 break
         out.append(section_trace(fin, sec, ci, params, options, spec, link_metrics(kind, arrived, start, params,
-                                                                                     options)))
+                                                                                   options)))
         arrived = fin.end if fin.success else None
         if whole and not out[-1].success:
             break  # heroicons' paper airplane: 0.87 -> 0.27 s on a last iterate whose first section fails
@@ -731,7 +733,7 @@ def _infeasible_curve(specs, sections, bad: int, ci, params, options, popts) -> 
     if refused is not None:
         other = f"section {bad} of this curve cannot be planned"
         return [failed(sec, ci, params, options, TraceStatus.NOT_PLANNED,
-                        f"reach {options.reach:.4g}: not planned: " + (refused if k == bad else other))
+                       f"reach {options.reach:.4g}: not planned: " + (refused if k == bad else other))
                 for k, sec in enumerate(sections)]
     searched = options.reach_hint
     wider = smallest_reach(specs[bad], popts) if searched else None
