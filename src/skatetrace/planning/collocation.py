@@ -34,8 +34,8 @@ from .nlp import GiveUp, SparseProgram
 from ..processes import recording_interrupts
 from .symbolic import sleigh_functions
 
-__all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "program_too_large",
-           "program_unknowns", "solve_program"]
+__all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "ProgramSolution", "iterations_within",
+           "program_too_large", "program_unknowns", "solve_program"]
 
 _DEGREE = 3
 #: IPOPT's ends that may still leave a feasible point, and the largest constraint violation of one.
@@ -185,6 +185,12 @@ class ProgramSolution:
         cap; where it would have failed sooner (IPOPT proving it infeasible), the budget counts more.
         """
         return int(self.allowed if self.status == "Given_Up" else self.iterations) * int(self.unknowns)
+
+
+def iterations_within(max_work: int, unknowns: int) -> int:
+    """The iterations a program of ``unknowns`` may make on ``max_work`` (a plan's budget, what is left of it):
+    one more than fit in it, so that a program stopped there has spent more than ``max_work``."""
+    return max_work // max(unknowns, 1) + 1
 
 
 def _guess_profile(length: float, duration: float):
@@ -434,7 +440,7 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     # 33 ms an iteration against 50 ms, but changed IPOPT's path on every figure, and the plans it
     # found were worse where it mattered (the paragraph double three peaked at 187 m/s^2 against 46;
     # the circle eight's warm start took 284 iterations, both programs 240 before).
-    allowed = o.iterations_for(n) if max_work is None else min(o.iterations_for(n), max_work // max(n, 1) + 1)
+    allowed = o.iterations_for(n) if max_work is None else min(o.iterations_for(n), iterations_within(max_work, n))
     res = prog.solve({"print_time": False, "error_on_fail": False, "ipopt.print_level": o.print_level,
                       "ipopt.sb": "yes", "ipopt.mu_strategy": o.barrier, "ipopt.mu_init": o.mu_init,
                       "ipopt.max_iter": allowed, "ipopt.tol": o.tol}, o.give_up)

@@ -707,14 +707,16 @@ def _finish_curve(plan, links, specs, sections, ci, params, options, fn, whole: 
         start = {"start": planned, "jump": planned, "continuous": arrived,
                  "impulse": dataclasses.replace(planned, a=arrived.a, b=arrived.b) if arrived else None}[kind]
         target = RestState(float(X[2, -1]), float(X[3, -1]), float(r1[0]), float(r1[1]))
+        def finished(stride, factor=1.0):
+            return finish_section(params, spec.pieces, times, X[5], start, target, X, stride=stride,
+                                  rtol=options.rtol * factor, atol=options.atol * factor)
+
         for stride in _STRIDES:
-            fin = finish_section(params, spec.pieces, times, X[5], start, target, X, stride=stride,
-                                 rtol=options.rtol, atol=options.atol)
+            fin = finished(stride)
             if fin.success:
                 break
         for factor in _REROLLS if _narrow(fin) else ():
-            again = finish_section(params, spec.pieces, times, X[5], start, target, X, stride=_STRIDES[-1],
-                                   rtol=options.rtol * factor, atol=options.atol * factor)
+            again = finished(_STRIDES[-1], factor)
             if again.success:
                 fin = again
                 break

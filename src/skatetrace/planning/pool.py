@@ -29,7 +29,7 @@ from threadpoolctl import threadpool_limits
 
 from ..processes import DEFAULT_MAX_WORKERS, available_workers, can_fork, map_forked, run_jobs, worker_count
 from ..progress import Channel
-from .collocation import ProgramSolution, solve_program
+from .collocation import ProgramSolution, iterations_within, solve_program
 
 __all__ = ["available_workers", "solve_programs", "charged_in_order", "reporting", "spending", "BudgetSpent",
            "WorkBudget", "DEFAULT_MAX_WORKERS"]
@@ -249,8 +249,8 @@ def _charged_in_order(fn: Callable[[J], R], items: Sequence[J], workers: int | N
             for c in charges:
                 if c.batch != batch:
                     batch, cap = c.batch, budget.cap(c.share, c.size)
-                # stopped at the cap, a program has done one iteration more than the cap allows
-                capped = (cap // c.unknowns + 1) * c.unknowns if c.unknowns else c.work
+                # stopped at the cap, a program has done the iterations solve_program allows on it
+                capped = iterations_within(cap, c.unknowns) * c.unknowns if c.unknowns else c.work
                 if c.work > capped and c.share < 1.0:
                     # stopped by a share of the budget, the program would have been left unsolved
                     # with the budget not spent, and the item gone on from there: solved again here
