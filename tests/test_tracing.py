@@ -771,3 +771,64 @@ def test_the_search_counts_a_stop_that_outreaches_the_best_alike_in_a_batch_and_
     for done in (one_by_one, batched):
         assert done.best.metrics["max_abs_a"] == 2.0 and done.attempts == 4
         assert done.nfev == 10 + 10 + 4 + 10  # placement 2 counted as its stop alone
+
+
+# ---- an apex beside its curvature's singular point is not solved ---------------------------------
+
+
+def _apex_calls(monkeypatch):
+    """solve_stop's glide positions, recorded as trace_section calls it."""
+    from skatetrace.tracing import maneuver
+    from skatetrace.tracing import sections as tracing
+
+    real, seen = maneuver.solve_stop, []
+
+    def recorded(params, legs, glide_ab, speed, **kw):
+        seen.append(tuple(glide_ab))
+        return real(params, legs, glide_ab, speed, **kw)
+
+    monkeypatch.setattr(tracing, "solve_stop", recorded)
+    return seen
+
+
+def test_an_apex_beside_its_curvatures_singular_point_counts_as_tried_and_is_not_solved(monkeypatch):
+    """A gently curved arc (radius 500 in the paper's model): the apex (0, 0) is 1.5 |kappa| = 3e-3 from the
+    singular point (0, -kappa I / M), three singular limits. It is not solved; the trace is the one the
+    search kept when it was (the instant apex on the arc's axis), with fewer integrations."""
+    from skatetrace.tracing import placements
+    from skatetrace.tracing import sections as tracing
+
+    kappa = 0.002
+    sec = _single(Segment(kappa, 2.0)).curves[0].sections()[0]
+    limit = TraceOptions().singular_limit * P.length_scale
+    assert placements.apex_singular_distance(P, kappa, (0.0, 0.0)) == pytest.approx(3.0 * limit)
+    seen = _apex_calls(monkeypatch)
+    kept = tracing.trace_section(P, sec, TraceOptions(workers=1))
+    assert kept.success, kept.message
+    assert all(placements.apex_singular_distance(P, kappa, ab) > placements.APEX_CLEARANCE * limit for ab in seen)
+    assert kept.glide["a"] > 0.0 and kept.glide["b"] == 0.0
+    seen.clear()
+    monkeypatch.setattr(tracing, "APEX_CLEARANCE", 0.0)
+    solved = tracing.trace_section(P, sec, TraceOptions(workers=1))
+    assert (0.0, 0.0) in seen  # solved when nothing keeps it out
+    assert (kept.glide, kept.metrics, kept.residuals) == (solved.glide, solved.metrics, solved.residuals)
+    assert kept.nfev < solved.nfev
+
+
+def test_an_apex_beyond_the_clearance_is_solved_and_a_section_only_such_apexes_could_trace_says_why(monkeypatch):
+    from skatetrace.tracing import placements
+    from skatetrace.tracing import sections as tracing
+
+    limit = TraceOptions().singular_limit * P.length_scale
+    kappa = 12.0 * limit / 1.5  # the apex (0, 0) twelve limits from the singular point
+    seen = _apex_calls(monkeypatch)
+    tracing.trace_section(P, _single(Segment(kappa, 2.0)).curves[0].sections()[0], TraceOptions(workers=1))
+    assert (0.0, 0.0) in seen
+    # the only placement asked for is within the clearance: the section fails with its reason, unsolved
+    seen.clear()
+    near = 3.0 * limit / 1.5
+    failed = tracing.trace_section(P, _single(Segment(near, 2.0)).curves[0].sections()[0],
+                                   TraceOptions(workers=1, glide_lateral=0.0))
+    assert not failed.success and failed.status is TraceStatus.SINGULAR and seen == []
+    assert "within 10 singular limits" in failed.message and "(0, -0.003)" in failed.message
+    assert placements.APEX_CLEARANCE == 10.0

@@ -14,10 +14,27 @@ from typing import TYPE_CHECKING
 from ..dynamics.model import SleighParams
 from ..figures.geometry import shifted_polynomial
 
-__all__ = ["auto_maneuver_length", "glide_candidates", "legs_from_apex", "line_apex"]
+__all__ = ["APEX_CLEARANCE", "apex_singular_distance", "auto_maneuver_length", "glide_candidates", "legs_from_apex",
+           "line_apex"]
 
 if TYPE_CHECKING:  # pragma: no cover - for the annotations only (sections imports this module)
     from .sections import TraceOptions
+
+#: A glide's apex nearer than this many singular limits (``TraceOptions.singular_limit``) to the
+#: singular point of the apex's curvature is not solved. Its launch and stop both start there, and
+#: while the ramp is weak the mass hovers about the singular point, where the control rates grow
+#: as one over the distance: on a gently curved arc of resvg-path-m-a-trimmed (the apex ``(0, 0)``
+#: 1.3 limits away) each integration took some 28,000 steps, 28 ms, and 330 of them were 3.5 of the
+#: drawing's 4.4 s of tracing, for no section traced. No trace kept has come near: over 316
+#: distinct sections of the school figures (1.5 to 1.9 m), the examples and the paper's figures,
+#: and the 57 corpus drawings at 6 m, the kept apexes were 22 limits or more from it (measured
+#: 2026-11-29, every placement solved as before).
+APEX_CLEARANCE = 10.0
+
+
+def apex_singular_distance(params: SleighParams, kappa: float, glide_ab: tuple[float, float]) -> float:
+    """How far the apex ``glide_ab`` is from the singular point ``(0, -kappa I / M)`` of its curvature ``kappa``."""
+    return math.hypot(glide_ab[0], glide_ab[1] + kappa * params.I / params.M)
 
 
 def auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> float:

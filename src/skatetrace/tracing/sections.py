@@ -38,7 +38,7 @@ from .leg_motion import leg_motion
 from .leg_motion import load as load_leg_motion
 from .maneuver import ManeuverSolution, glide_state, mirrored_maneuver, same_legs, solve_stop
 from .options import BRIEF_PLACEMENTS, LONG_SECTION, SHORT_SECTION, TraceOptions
-from .placements import auto_maneuver_length, glide_candidates, legs_from_apex
+from .placements import APEX_CLEARANCE, apex_singular_distance, auto_maneuver_length, glide_candidates, legs_from_apex
 from .search import Attempt, outreaches, search_placements
 from .shapes import ShapeIndex, exact_key
 
@@ -314,7 +314,8 @@ def trace_section(
 
     The glide is placed on each segment in turn (longest first) and at each candidate mass
     position (:func:`glide_candidates`), until ``options.max_placements`` have been tried without
-    success. Of the placements whose stop and launch are both found
+    success; an apex within :data:`~skatetrace.tracing.placements.APEX_CLEARANCE` singular limits of
+    its curvature's singular point counts as tried and failed, unsolved. Of the placements whose stop and launch are both found
     and pass every check (the first that works and up to ``options.search`` tried after it), the
     one whose mass stays closest to the blade is kept (least largest ``|a|, |b|``, then least peak
     kinetic energy of the mass); with ``options.placement="first"`` the first is
@@ -340,6 +341,7 @@ def trace_section(
     segs = section.segments
     order = sorted(range(len(segs)), key=lambda i: -segs[i].length)
     kw = dict(rtol=options.rtol, atol=options.atol, singular_limit=options.singular_limit)
+    clearance = APEX_CLEARANCE * options.singular_limit * params.length_scale
 
     def placements():
         for g in order:
@@ -358,6 +360,8 @@ def trace_section(
         before, after = legs_from_apex(segs, g, ell_g)
         glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
                  "kappa": kg, "speed": options.speed}
+        if apex_singular_distance(params, kg, glide_ab) <= clearance:
+            return Attempt(_near_singular(params, section, options, curve_index, glide, clearance), 0)
         kwf = dict(kw, fallback=fallback)
         with np.errstate(divide="ignore", invalid="ignore"):
             stop = solve_stop(params, after, glide_ab, 1.0, **kwf)
@@ -418,6 +422,21 @@ def _launch(params: SleighParams, before, after, glide_ab, stop: ManeuverSolutio
     if glide_ab[0] == 0.0 and same_legs(before, after):
         return mirrored_maneuver(stop, before)
     return solve_stop(params, before, glide_ab, 1.0, backward=True, **kw)
+
+
+def _near_singular(params, section, options, curve_index, glide, clearance) -> SectionTrace:
+    """The failure of a placement whose apex is within ``clearance`` of its curvature's singular point, not solved.
+
+    See :data:`~skatetrace.tracing.placements.APEX_CLEARANCE`: its manoeuvres would start where the
+    control rates grow without bound, and the weak ramps' integrations crawl there.
+    """
+    a, b, kappa = glide["a"], glide["b"], glide["kappa"]
+    message = (f"the glide's mass position ({a:.6g}, {b:.6g}) is "
+               f"{apex_singular_distance(params, kappa, (a, b)):.3g} from the singular point "
+               f"(0, {-kappa * params.I / params.M:.6g}) of its curvature {kappa:.6g}, within {APEX_CLEARANCE:g} "
+               f"singular limits ({clearance:.3g}): not solved")
+    return SectionTrace(success=False, status=TraceStatus.SINGULAR, message=message, curve_index=curve_index,
+                        section=section, params=params, speed=options.speed, glide=glide, nfev=0)
 
 
 def _assemble(params, section, options, curve_index, glide, before, stop, launch, nfev) -> SectionTrace:
