@@ -141,7 +141,8 @@ _QUIET = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"}
 
 
 def test_give_up_refuses_a_rule_that_means_nothing():
-    for bad in ((0, 1e-3), (2.5, 1e-3), (True, 1e-3), (10, -1.0), (10, float("nan"))):
+    for bad in ((0, 1e-3), (2.5, 1e-3), (True, 1e-3), (10, -1.0), (10, float("nan")), (10, 1e-3, -1),
+                (10, 1e-3, 2.0), (10, 1e-3, 5, -0.1), (10, 1e-3, 5, 0.01, float("nan"))):
         with pytest.raises(ValueError, match="GiveUp"):
             GiveUp(*bad)
 
@@ -165,3 +166,36 @@ def test_a_solve_the_rule_does_not_give_up_takes_the_same_path():
         np.testing.assert_array_equal(watched.x, plain.x)
     # a start that violates the constraints is given up at once where nothing is allowed
     assert _program().solve(options, GiveUp(1, 0.0)).status == "Given_Up"
+    # a stall window that never fills watches the objective without ending the solve
+    watched = _program().solve(options, GiveUp(1, 1e9, window=10_000, decrease=1.0, feasible=1e9))
+    assert watched.status == plain.status and watched.iterations == plain.iterations
+    np.testing.assert_array_equal(watched.x, plain.x)
+
+
+def _valley() -> SparseProgram:
+    # Rosenbrock's valley inside a disc, from its usual start: IPOPT takes some twenty iterations
+    prog = SparseProgram(2)
+    prog.constrain(prog.x[0] ** 2 + prog.x[1] ** 2, -np.inf, 4.0)
+    prog.minimize(100.0 * (prog.x[1] - prog.x[0] ** 2) ** 2 + (1.0 - prog.x[0]) ** 2)
+    prog.x0[:] = [-1.2, 1.0]
+    return prog
+
+
+def test_a_solve_that_stalls_ends_with_its_last_iterate():
+    options = dict(_QUIET, **{"ipopt.tol": 1e-10})
+    plain = _valley().solve(options)
+    assert plain.success and plain.iterations > 6
+    np.testing.assert_allclose(plain.x, [1.0, 1.0], atol=1e-6)
+    # any iterate "within 1e9 of the constraints" and the objective "falling by less than 1e3 of
+    # itself" over two iterations: the rule ends the solve at its third iteration, as stalled
+    stalled = _valley().solve(options, GiveUp(3, 1e9, window=2, decrease=1e3, feasible=1e9))
+    assert not stalled.success and stalled.status == "Stalled" and stalled.iterations <= 3
+    assert np.all(np.isfinite(stalled.x)) and np.max(np.abs(stalled.x - 1.0)) > 1e-3  # not the minimum
+    # a window wider than the iterations made cannot judge the trend yet: the same path, to the bit
+    watched = _valley().solve(options, GiveUp(1, 1e9, window=plain.iterations + 5, decrease=1e3, feasible=1e9))
+    assert watched.status == plain.status and watched.iterations == plain.iterations
+    np.testing.assert_array_equal(watched.x, plain.x)
+    # nor one whose objective fell over the window by more than ``decrease`` of itself: from 24.2 at
+    # the start to the minimum's 0 (to rounding), by far more than 1e3 times what is left
+    early = _valley().solve(options, GiveUp(1, 1e9, window=plain.iterations - 1, decrease=1e3, feasible=1e9))
+    assert early.status == plain.status and early.iterations == plain.iterations

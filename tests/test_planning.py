@@ -1108,3 +1108,33 @@ def test_a_warm_start_that_goes_nowhere_is_given_up_for_its_fallbacks(monkeypatc
     assert again[1].give_up is None and again[1].max_iter == planner._LINKED_ITER
     # a budget counts the given-up program as run on to its cap
     assert given_up[0].allowed == 500 and given_up[0].work == 500 * given_up[0].unknowns
+
+
+def test_a_warm_start_that_crawls_along_a_feasible_valley_stalls_and_keeps_its_iterate(monkeypatch):
+    # feather-aperture at 6 m: its circle's warm start (1,508 unknowns) meets its constraints within
+    # 1e-7 from its 50th iteration on, its barrier at the least, while the objective creeps down
+    # some 1 % in 50 iterations; it ran on to its 500 iterations (3.9 s) and failed, and the plan's
+    # budget ran out before the figure was planned. Stalled, its last iterate is a feasible warm start.
+    from skatetrace.planning import planner
+
+    rule = planner._WARM_GIVE_UP
+    assert rule.window >= 20 and 0.0 < rule.decrease <= 0.05 and rule.feasible <= 1e-5
+    drawing = st.resolve(DATA / "svg-corpus" / "feather-aperture.svg", size="6m", tol="1mm").figure
+    seen = []
+
+    class Enough(Exception):
+        pass
+
+    def first_batch(jobs, workers, stage, **kw):
+        seen.extend(zip(jobs, solve(jobs, workers, stage, **kw)))
+        raise Enough  # the warm starts are all this test looks at
+
+    solve = planner.solve_programs
+    monkeypatch.setattr(planner, "solve_programs", first_batch)
+    with pytest.raises(Enough):
+        plan_figure(drawing, options=st.TraceOptions(speed=2.0, reach=0.288 * 1.7, workers=1))
+    stalled = [sol for _job, sol in seen if sol.status == "Stalled"]
+    assert len(stalled) == 1 and stalled[0].unknowns > 1000
+    assert rule.iterations < stalled[0].iterations < 500
+    assert stalled[0].success and "stalled after" in stalled[0].message  # feasible: kept
+    assert all(sol.success for _job, sol in seen)

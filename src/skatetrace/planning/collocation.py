@@ -40,7 +40,7 @@ __all__ = ["MAX_UNKNOWNS", "PieceSpec", "SectionSpec", "ProgramOptions", "Progra
 _DEGREE = 3
 #: IPOPT's ends that may still leave a feasible point, and the largest constraint violation of one.
 _STALLED = ("Error_In_Step_Computation", "Maximum_Iterations_Exceeded", "Restoration_Failed",
-            "Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Level")
+            "Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Level", "Stalled")
 _FEASIBLE = 1e-8
 #: The most unknowns a program may have: the meshes that 12,000 allowed before the end states
 #: were merged with the nodes (25 unknowns an interval, not 19), so the same programs are refused.
@@ -178,13 +178,16 @@ class ProgramSolution:
     @property
     def work(self) -> int:
         """What a plan's budget counts: iterations times unknowns; a program given up as going
-        nowhere (``"Given_Up"``) at the iterations it was allowed, as if it had run on to them.
+        nowhere (``"Given_Up"``), or stalled and not kept, at the iterations it was allowed, as if
+        it had run on to them.
 
-        So the rule that gives it up (:class:`~skatetrace.planning.nlp.GiveUp`) saves time and
-        leaves the budget's decisions as they were where the program would have failed at its
-        cap; where it would have failed sooner (IPOPT proving it infeasible), the budget counts more.
+        So the rule that ends it (:class:`~skatetrace.planning.nlp.GiveUp`) saves time and leaves
+        the budget's decisions as they were where the program would have failed at its cap; where
+        it would have failed sooner (IPOPT proving it infeasible), the budget counts more. A
+        stalled program that is kept counts the iterations it made: its plan goes on from there.
         """
-        return int(self.allowed if self.status == "Given_Up" else self.iterations) * int(self.unknowns)
+        capped = self.status == "Given_Up" or (self.status == "Stalled" and not self.success)
+        return int(self.allowed if capped else self.iterations) * int(self.unknowns)
 
 
 def iterations_within(max_work: int, unknowns: int) -> int:
@@ -449,6 +452,10 @@ def _solve_program(sections: list[SectionSpec], options: ProgramOptions, guess, 
     if status == "Given_Up":
         message = (f"given up after {res.iterations} iterations: the constraints were never met within "
                    f"{o.give_up.violation:.3g} (at best {res.stats['least_violation']:.3g})")
+    elif status == "Stalled":
+        message = (f"stalled after {res.iterations} iterations: the constraints met within {o.give_up.feasible:.3g} "
+                   f"over the last {o.give_up.window}, the objective falling by less than "
+                   f"{o.give_up.decrease:.3g} of itself")
     if not ok and status in _STALLED:
         # A feasible point where IPOPT could not prove optimality (one-foot eight: the constraints
         # met to 5e-13, the step computation failing on degenerate multipliers) is a plan: the

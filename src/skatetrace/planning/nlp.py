@@ -17,6 +17,7 @@ each times a constant (a collocation interval's length is a piece's duration tim
 
 from __future__ import annotations
 
+import collections
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -37,18 +38,31 @@ class GiveUp:
     and the least constraint violation it has met (the largest ``lbg - g`` or ``g - ubg``) is
     still above ``violation``.
 
+    With ``window`` > 0 a solve that has made ``iterations`` iterations also ends, as stalled,
+    where its constraints were met within ``feasible`` at each of the last ``window + 1`` iterates
+    while its objective fell by less than ``decrease`` of itself over them: IPOPT crawling along a
+    feasible valley, its barrier at the least, with steps too short to converge before its last
+    iteration. Its last iterate is kept (status ``"Stalled"``), for the caller to judge.
+
     Checked at every iteration (restoration phases included) by an iteration callback that only
-    reads the iterate: a solve that is not given up takes the same path, to the bit.
+    reads the iterate: a solve that is not ended takes the same path, to the bit.
     """
 
     iterations: int
     violation: float
+    window: int = 0
+    decrease: float = 0.0
+    feasible: float = 0.0
 
     def __post_init__(self):
-        if isinstance(self.iterations, bool) or not isinstance(self.iterations, int) or self.iterations < 1:
-            raise ValueError(f"GiveUp.iterations must be a whole number >= 1, got {self.iterations!r}")
-        if not self.violation >= 0.0:  # also refuses NaN
-            raise ValueError(f"GiveUp.violation must be >= 0, got {self.violation!r}")
+        for name in ("iterations", "window"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < (1 if name == "iterations" else 0):
+                raise ValueError(f"GiveUp.{name} must be a whole number >= {1 if name == 'iterations' else 0}, "
+                                 f"got {value!r}")
+        for name in ("violation", "decrease", "feasible"):
+            if not getattr(self, name) >= 0.0:  # also refuses NaN
+                raise ValueError(f"GiveUp.{name} must be >= 0, got {getattr(self, name)!r}")
 
 
 class _Watch(ca.Callback):
@@ -58,7 +72,8 @@ class _Watch(ca.Callback):
     def __init__(self, rule: GiveUp, nx: int, lbg: np.ndarray, ubg: np.ndarray):
         ca.Callback.__init__(self)
         self.rule, self.nx, self.lbg, self.ubg = rule, nx, lbg, ubg
-        self.count, self.least, self.stopped = 0, np.inf, False
+        self.count, self.least, self.stopped, self.stalled = 0, np.inf, False, False
+        self.recent: collections.deque = collections.deque(maxlen=rule.window + 1)  # (objective, violation)
         self.construct("give_up_watch", {})
 
     def get_n_in(self):
@@ -80,15 +95,22 @@ class _Watch(ca.Callback):
 
     def eval(self, arg):
         self.count += 1
-        if self.least > self.rule.violation:  # else the rule can no longer give the solve up
+        rule = self.rule
+        if self.least > rule.violation or rule.window:  # else the rule can no longer end the solve
+            worst = 0.0
             if self.lbg.size:
                 g = np.asarray(arg[2]).ravel()
                 worst = max(float(np.max(self.lbg - g)), float(np.max(g - self.ubg)), 0.0)
-                self.least = min(self.least, worst)
-            else:
-                self.least = 0.0
-            self.stopped = self.count >= self.rule.iterations and self.least > self.rule.violation
-        return [1 if self.stopped else 0]
+            self.least = min(self.least, worst)
+            self.stopped = self.count >= rule.iterations and self.least > rule.violation
+            if rule.window:
+                self.recent.append((float(arg[1]), worst))
+                first, last = self.recent[0][0], self.recent[-1][0]
+                self.stalled = (not self.stopped and self.count >= rule.iterations
+                                and len(self.recent) == self.recent.maxlen
+                                and max(v for _, v in self.recent) <= rule.feasible
+                                and first - last < rule.decrease * abs(last))
+        return [1 if self.stopped or self.stalled else 0]
 
 
 @dataclass(frozen=True, slots=True)
@@ -362,7 +384,8 @@ class SparseProgram:
         """Solve with IPOPT (``options`` are nlpsol options, e.g. ``ipopt.tol``). Never raises for a failed solve.
 
         With ``give_up``, a solve that the rule gives up ends with status ``"Given_Up"`` (not a
-        success), ``stats["least_violation"]`` the least constraint violation it met.
+        success), ``stats["least_violation"]`` the least constraint violation it met; one it ends as
+        stalled with status ``"Stalled"`` (not a success), its last iterate kept.
         """
         nlp, derivatives = self._functions()
         opts = dict(options)
@@ -385,6 +408,8 @@ class SparseProgram:
         if watch is not None and watch.stopped:
             status, success = "Given_Up", False
             stats = dict(stats, least_violation=watch.least)
+        elif watch is not None and watch.stalled:
+            status, success = "Stalled", False
         return ProgramResult(success=success, status=status, x=np.asarray(sol["x"]).ravel(), objective=float(sol["f"]),
                              iterations=int(stats.get("iter_count", 0)), stats=stats)
 
