@@ -312,21 +312,22 @@ def trace_section(
 ) -> SectionTrace:
     """Find controls that trace ``section`` exactly from rest to rest.
 
-    The glide is placed on each segment in turn (longest first) and at each candidate mass
-    position (:func:`glide_candidates`), until ``options.max_placements`` have been tried without
-    success; an apex within :data:`~skatetrace.tracing.placements.APEX_CLEARANCE` singular limits of
-    its curvature's singular point counts as tried and failed, unsolved. Of the placements whose stop and launch are both found
-    and pass every check (the first that works and up to ``options.search`` tried after it), the
-    one whose mass stays closest to the blade is kept (least largest ``|a|, |b|``, then least peak
-    kinetic energy of the mass); with ``options.placement="first"`` the first is
+    The glide is placed on each segment in turn (longest first) and at each candidate mass position
+    (:func:`glide_candidates`), until ``options.max_placements`` have been tried without success; an
+    apex within :data:`~skatetrace.tracing.placements.APEX_CLEARANCE` singular limits of its
+    curvature's singular point counts as tried and failed, unsolved. Of the placements whose stop
+    and launch are both found and pass every check (the first that works and up to
+    ``options.search`` tried after it), the one whose mass stays closest to the blade is kept (least
+    largest ``|a|, |b|``, then least peak kinetic energy of the mass); with
+    ``options.placement="first"`` the first is
     (:func:`~skatetrace.tracing.search.search_placements`). The search runs first with the stops'
-    well-conditioned solves alone (``fallback=False`` of :func:`~skatetrace.tracing.maneuver.solve_stop`):
-    a stop that only the full-accuracy fallbacks find has its speed grazing zero before the end,
-    and those fallbacks are most of a long section's time where they fail. Only where no
-    placement works without them is the search run again with them. With
-    ``options.split_on_failure`` (the caller splits a section that fails) a section of several
-    pieces is searched less: see :class:`~skatetrace.tracing.options.TraceOptions`. Never raises for
-    a section that cannot be traced: the result has ``success=False`` and the reason.
+    well-conditioned solves alone (``fallback=False`` of
+    :func:`~skatetrace.tracing.maneuver.solve_stop`): a stop that only the full-accuracy fallbacks
+    find has its speed grazing zero before the end, and those fallbacks are most of a long section's
+    time where they fail. Only where no placement works without them is the search run again with
+    them. With ``options.split_on_failure`` (the caller splits a section that fails) a section of
+    several pieces is searched less: see :class:`~skatetrace.tracing.options.TraceOptions`. Never
+    raises for a section that cannot be traced: the result has ``success=False`` and the reason.
 
     Raises
     ------
