@@ -55,11 +55,10 @@ class GiveUp:
     feasible: float = 0.0
 
     def __post_init__(self):
-        for name in ("iterations", "window"):
+        for name, least in (("iterations", 1), ("window", 0)):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < (1 if name == "iterations" else 0):
-                raise ValueError(f"GiveUp.{name} must be a whole number >= {1 if name == 'iterations' else 0}, "
-                                 f"got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                raise ValueError(f"GiveUp.{name} must be a whole number >= {least}, got {value!r}")
         for name in ("violation", "decrease", "feasible"):
             if not getattr(self, name) >= 0.0:  # also refuses NaN
                 raise ValueError(f"GiveUp.{name} must be >= 0, got {getattr(self, name)!r}")

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from ..dynamics.model import SleighParams
+from ..dynamics.model import SleighParams, singular_point
 from ..figures.geometry import shifted_polynomial
 
 __all__ = ["APEX_CLEARANCE", "apex_singular_distance", "auto_maneuver_length", "glide_candidates", "legs_from_apex",
@@ -34,7 +34,8 @@ APEX_CLEARANCE = 10.0
 
 def apex_singular_distance(params: SleighParams, kappa: float, glide_ab: tuple[float, float]) -> float:
     """How far the apex ``glide_ab`` is from the singular point ``(0, -kappa I / M)`` of its curvature ``kappa``."""
-    return math.hypot(glide_ab[0], glide_ab[1] + kappa * params.I / params.M)
+    sa, sb = singular_point(params, kappa)
+    return math.hypot(glide_ab[0] - sa, glide_ab[1] - sb)
 
 
 def auto_maneuver_length(params: SleighParams, kappa: float, length: float) -> float:

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..dynamics.integrator import load as load_integrator
-from ..dynamics.model import SleighParams, mass_energy, velocities
+from ..dynamics.model import SleighParams, mass_energy, singular_point, velocities
 from ..figures.figure import Figure, Section
 from ..figures.geometry import travel
 from ..processes import run_jobs
@@ -434,7 +434,7 @@ def _near_singular(params, section, options, curve_index, glide, clearance) -> S
     a, b, kappa = glide["a"], glide["b"], glide["kappa"]
     message = (f"the glide's mass position ({a:.6g}, {b:.6g}) is "
                f"{apex_singular_distance(params, kappa, (a, b)):.3g} from the singular point "
-               f"(0, {-kappa * params.I / params.M:.6g}) of its curvature {kappa:.6g}, within {APEX_CLEARANCE:g} "
+               f"(0, {singular_point(params, kappa)[1]:.6g}) of its curvature {kappa:.6g}, within {APEX_CLEARANCE:g} "
                f"singular limits ({clearance:.3g}): not solved")
     return SectionTrace(success=False, status=TraceStatus.SINGULAR, message=message, curve_index=curve_index,
                         section=section, params=params, speed=options.speed, glide=glide, nfev=0)
