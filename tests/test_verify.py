@@ -261,3 +261,56 @@ def test_a_section_through_the_contact_point_is_not_sampled_to_round_off(monkeyp
     assert each.schedule.t.size > 2 * done.schedule.t.size
     # the same deviation within the replay's spread (the sampling is not what bounds it)
     assert done.report.max_deviation <= 1.2 * each.report.max_deviation
+
+
+def _spiral_chain(n=120, seed=3):
+    """A smooth chain of ``n`` short spirals (curvature continuous, about 2 mm each), placed on the ice."""
+    from skatetrace.figures.figure import SMOOTH, Curve
+    from skatetrace.figures.geometry import Spiral
+
+    rng = np.random.default_rng(seed)
+    pieces, k = [], 0.8
+    for _ in range(n):
+        slope = rng.uniform(-40.0, 40.0)
+        length = rng.uniform(1e-3, 3e-3)
+        pieces.append(Spiral((k, slope, 0.0, 0.0), length))
+        k += slope * length
+    return Curve(tuple(pieces), (SMOOTH,) * (n - 1)).layout()
+
+
+def test_nearer_pieces_is_the_test_of_every_point_piece_after_piece():
+    """The k-d tree only leaves out points that no piece's disc test can take: the same distances, bit for bit."""
+    from scipy.spatial import cKDTree
+
+    from skatetrace.figures.geometry import distance_to_segment, segment_points
+    from skatetrace.verification.distances import nearer_pieces
+
+    placed = _spiral_chain()
+    samples = [segment_points(p.start, p.segment, 65) for p in placed]
+    curve = np.hstack(samples)
+    rng = np.random.default_rng(7)
+    # replayed points beside the chain, a few millimetres off: many lie outside every piece's disc
+    # (whose radius is about a millimetre) yet nearer a spiral than to any of its samples
+    base = curve[:, rng.integers(0, curve.shape[1], 3000)]
+    pts = base + rng.normal(scale=2e-3, size=base.shape)
+    d0 = cKDTree(curve.T).query(pts.T)[0]
+    want = d0.copy()
+    for p, xy in zip(placed, samples):  # every point tested against every piece's disc, as before the tree
+        seg = p.segment
+        centre = xy.mean(axis=1)
+        radius = float(np.max(np.hypot(xy[0] - centre[0], xy[1] - centre[1])))
+        radius += seg.length**2 * seg.max_abs_curvature() / (8 * 64**2) + 1e-12 * seg.length
+        near = np.hypot(pts[0] - centre[0], pts[1] - centre[1]) - radius < want
+        want[near] = np.minimum(want[near], distance_to_segment(pts[:, near], p.start, seg))
+    got = nearer_pieces(d0, pts, placed, samples)
+    assert np.array_equal(got, want)
+    assert np.count_nonzero(got < d0) > 100  # the spirals' own distances did lower many
+    assert np.array_equal(d0, cKDTree(curve.T).query(pts.T)[0])  # and the input is left as it was
+
+
+def test_rows_by_piece_are_each_pieces_rows_in_order():
+    piece = np.array([3, 3, 0, 0, 1, 3, 7, 7, 1, 0])
+    rows = verify_module._rows_by_piece(piece)
+    assert sorted(rows) == [0, 1, 3, 7]
+    for k, idx in rows.items():
+        assert np.array_equal(idx, np.flatnonzero(piece == k))

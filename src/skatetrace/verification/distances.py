@@ -4,7 +4,7 @@ The replayed path between two dense samples is the cubic Hermite curve of their 
 velocities (the model's); the nearest point of it to a point of the figure is found by
 golden-section search and Newton's method (compiled), so that the chord error of a polyline does
 not count against the replay (:func:`figure_to_replay`). The other way, a replayed point's distance
-to a piece is the piece's own (:func:`nearer_piece`). :func:`~skatetrace.verification.verify.verify`
+to a piece is the piece's own (:func:`nearer_pieces`). :func:`~skatetrace.verification.verify.verify`
 measures both ways with them.
 """
 
@@ -24,7 +24,7 @@ from ..figures.geometry import distance_to_segment
 if TYPE_CHECKING:  # pragma: no cover - for the annotations only (verify imports this module)
     from .verify import Replay
 
-__all__ = ["figure_to_replay", "nearer_piece"]
+__all__ = ["figure_to_replay", "nearer_pieces"]
 
 
 @njit(cache=True)
@@ -107,19 +107,20 @@ def _golden_distances(qx, qy, t, x, y, vx, vy, cand, best):
         best[i] = min(best[i], dist)
 
 
-def figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params: SleighParams) -> np.ndarray:
-    """Distance from target points (2, k) to the replayed path.
+def figure_to_replay(points: np.ndarray, rep: Replay, rows: np.ndarray, params: SleighParams) -> np.ndarray:
+    """Distance from target points (2, k) to the replayed path on ``rows`` of ``rep``.
 
-    The nearest dense sample is found with a k-d tree; the distance is then minimised over the
-    cubic Hermite interpolant of the positions (velocities from the model) on the two adjacent
-    sample intervals, by golden-section search (compiled), so the chord error of a polyline does not count.
+    ``rows`` is a boolean mask of the replay's rows or their indices, increasing. The nearest dense
+    sample is found with a k-d tree; the distance is then minimised over the cubic Hermite
+    interpolant of the positions (velocities from the model) on the two adjacent sample intervals,
+    by golden-section search (compiled), so the chord error of a polyline does not count.
     """
     # Chunks share their end instants: a repeated time carries the limits from the left and from the
     # right, and the blade's speed jumps there with the control rates (the momenta are continuous).
     # Both rows are kept, so each interval is interpolated with its own one-sided velocities. For
     # the nearest sample, the two proper intervals (of positive length) before it and the two after
     # it are searched, however many repeated rows lie between.
-    sel = np.flatnonzero(mask)
+    sel = np.flatnonzero(rows) if rows.dtype == bool else rows
     t = rep.t[sel]
     st = rep.state[:, sel]
     ctl = rep.controls[:, sel]
@@ -146,21 +147,35 @@ def figure_to_replay(points: np.ndarray, rep: Replay, mask: np.ndarray, params: 
     return best
 
 
-def nearer_piece(d: np.ndarray, pts: np.ndarray, placed, xy: np.ndarray) -> np.ndarray:
-    """``d`` lowered to the distance from ``pts`` to a placed piece where that is nearer.
+def nearer_pieces(d: np.ndarray, pts: np.ndarray, pieces, samples) -> np.ndarray:
+    """``d`` lowered, piece after piece, to the distance from ``pts`` to each placed piece where that is nearer.
 
-    ``xy`` are 65 points along the piece. A spiral's distance takes Newton iterations, so it is
-    computed only for the points that its bounding disc does not already rule out.
+    ``samples`` are 65 points along each piece. An arc's or a line's distance is closed-form and
+    taken for every point. A spiral's takes Newton iterations, so it is computed only for the points
+    that its bounding disc does not already rule out; those are looked up in a k-d tree of ``pts``,
+    within the disc grown by the largest of ``d`` (no point farther can be nearer), so that a
+    section of thousands of spirals costs in proportion to the points near each one rather than
+    all of them for every spiral (nanosvg-drawing in exact mode, 7,916 spirals: its replay measured
+    in 2.9 s instead of 11.7). The answer is the same as testing every point.
     """
-    seg = placed.segment
-    if seg.constant:
-        return np.minimum(d, distance_to_segment(pts, placed.start, seg))
-    centre = xy.mean(axis=1)
-    # chords of the 65-point sample lie within L^2 max|k| / (8 * 64^2) of the curve
-    radius = float(np.max(np.hypot(xy[0] - centre[0], xy[1] - centre[1])))
-    radius += seg.length**2 * seg.max_abs_curvature() / (8 * 64**2) + 1e-12 * seg.length
-    near = np.hypot(pts[0] - centre[0], pts[1] - centre[1]) - radius < d
-    out = d.copy()
-    if np.any(near):
-        out[near] = np.minimum(d[near], distance_to_segment(pts[:, near], placed.start, seg))
+    out = np.array(d, dtype=float)
+    grow = float(out.max()) if out.size else 0.0
+    tree = None
+    for placed, xy in zip(pieces, samples):
+        seg = placed.segment
+        if seg.constant:
+            out = np.minimum(out, distance_to_segment(pts, placed.start, seg))
+            continue
+        centre = xy.mean(axis=1)
+        # chords of the 65-point sample lie within L^2 max|k| / (8 * 64^2) of the curve
+        radius = float(np.max(np.hypot(xy[0] - centre[0], xy[1] - centre[1])))
+        radius += seg.length**2 * seg.max_abs_curvature() / (8 * 64**2) + 1e-12 * seg.length
+        if tree is None:
+            tree = cKDTree(pts.T)
+        # every point that the test below can accept, and more: the margin covers the tree's rounding
+        ball = tree.query_ball_point(centre, (radius + grow) * (1.0 + 1e-9), return_sorted=True)
+        cand = np.asarray(ball, dtype=np.intp)
+        near = cand[np.hypot(pts[0, cand] - centre[0], pts[1, cand] - centre[1]) - radius < out[cand]]
+        if near.size:
+            out[near] = np.minimum(out[near], distance_to_segment(pts[:, near], placed.start, seg))
     return out

@@ -38,7 +38,7 @@ from ..figures.geometry import segment_points
 from ..processes import map_forked
 from ..progress import Channel
 from ..tracing.sections import FigureTrace
-from .distances import figure_to_replay, nearer_piece
+from .distances import figure_to_replay, nearer_pieces
 
 __all__ = ["schedule_from_trace", "resampled", "Replay", "VerificationReport", "replay", "reporting", "verify",
            "verify_within"]
@@ -364,25 +364,24 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
         sxi1, sxi2 = xi1[idx], xi2[idx]
         pts = sub.state[3:5]
         finite = bool(np.all(np.isfinite(sub.state)))
-        # distances to points on the pieces: an upper bound that lets _nearer skip far spirals
+        # distances to points on the pieces: an upper bound that lets nearer_pieces skip far spirals
         samples = [segment_points(p.start, p.segment, 65) for p in sec.section.pieces]
         # a replay that turned NaN or infinite is measured as infinitely far (the distance searches
         # refuse non-finite points: a planned drawing's replay crashed the verification there)
-        d_to = cKDTree(np.hstack(samples).T).query(pts.T)[0] if finite else np.array([math.inf])
-        d_from = np.zeros(0) if finite else np.array([math.inf])
-        for p, xy in zip(sec.section.pieces, samples if finite else ()):
-            d_to = nearer_piece(d_to, pts, p, xy)
+        d_to = (nearer_pieces(cKDTree(np.hstack(samples).T).query(pts.T)[0], pts, sec.section.pieces, samples)
+                if finite else np.array([math.inf]))
+        rows = _rows_by_piece(sub.piece)
+        d_from = [np.zeros(0) if finite else np.array([math.inf])]
+        for p in sec.section.pieces if finite else ():
             n = max(64, int(p.segment.length * density))
             # Each piece's points are matched with the stretch of replay labelled with that piece
             # (one sample more each side): where two pieces pass close to each other, as at the
             # waist of a figure eight, the nearest sample may otherwise belong to the other one.
-            own = np.flatnonzero(sub.piece == p.index)
-            mp = np.zeros(sub.t.size, dtype=bool)
-            if own.size:
-                mp[max(own[0] - 1, 0):own[-1] + 2] = True
-            else:
-                mp[:] = True
-            d_from = np.concatenate([d_from, figure_to_replay(segment_points(p.start, p.segment, n), sub, mp, params)])
+            own = rows.get(p.index)
+            span = (np.arange(max(int(own[0]) - 1, 0), min(int(own[-1]) + 2, sub.t.size)) if own is not None
+                    else np.arange(sub.t.size))
+            d_from.append(figure_to_replay(segment_points(p.start, p.segment, n), sub, span, params))
+        d_from = np.concatenate(d_from)
         speeds = (abs(float(sxi2[0])), abs(float(sxi2[-1])))
         # "At rest" means below 1e-8 of the fastest motion in the section (the glide, the blade, or
         # the mass relative to the ice): the replay resolves speeds to a fraction of that scale.
@@ -401,11 +400,11 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
         }
         drifts = []
         for p in sec.section.pieces:
-            mp = sub.piece == p.index
-            if np.count_nonzero(mp) < 2:
-                continue
             if not p.segment.constant:
                 continue  # a spiral: neither p1 + r p2 nor p2 is conserved
+            mp = rows.get(p.index)
+            if mp is None or mp.size < 2:
+                continue
             k = p.segment.coefficients[0]
             if k != 0.0:
                 # r = xi2 / xi1 in the body frame: the path's radius, negated where the blade runs
@@ -421,6 +420,14 @@ def _measure(trace: FigureTrace, rep: Replay, tol: float, only=None):
     if only is None:
         _PROGRESS.report("measuring", len(trace.sections), len(trace.sections))
     return out
+
+
+def _rows_by_piece(piece: np.ndarray) -> dict[int, np.ndarray]:
+    """The rows labelled with each piece, increasing: ``np.flatnonzero(piece == k)`` for every ``k`` at once."""
+    order = np.argsort(piece, kind="stable")
+    labels, starts = np.unique(piece[order], return_index=True)
+    ends = np.append(starts[1:], piece.size)
+    return {int(k): order[a:b] for k, a, b in zip(labels, starts, ends)}
 
 
 #: The relative perturbation of the controls by which the replay's conditioning is measured (four
