@@ -832,3 +832,16 @@ def test_an_apex_beyond_the_clearance_is_solved_and_a_section_only_such_apexes_c
     assert not failed.success and failed.status is TraceStatus.SINGULAR and seen == []
     assert "within 10 singular limits" in failed.message and "(0, -0.003)" in failed.message
     assert placements.APEX_CLEARANCE == 10.0
+
+
+def test_nearest_breakpoint_is_argmins_first_nearest_without_the_matrix():
+    """The nearest of increasing values (repeated ones, exact ties between two) and of values in any order."""
+    from skatetrace.tracing.sections import _nearest
+
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        v = np.sort(np.round(rng.uniform(0.0, 10.0, int(rng.integers(1, 30))), int(rng.integers(0, 3))))
+        x = np.concatenate([rng.uniform(-1.0, 11.0, 20), v, 0.5 * (v[:-1] + v[1:])])  # midpoints: exact ties
+        assert np.array_equal(_nearest(v, x), np.argmin(np.abs(v[:, None] - x[None, :]), axis=0))
+        w = rng.permutation(v)
+        assert np.array_equal(_nearest(w, x), np.argmin(np.abs(w[:, None] - x[None, :]), axis=0))

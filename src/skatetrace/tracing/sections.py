@@ -272,7 +272,7 @@ class SectionTrace:
         # Lengths reached at a breakpoint (every join is one) need no search: the blade passes
         # them there, to the integration's accuracy.
         s_bp = self.evaluate(bps, geometry=False)["s"]
-        k = np.argmin(np.abs(s_bp[:, None] - flat[None, :]), axis=0)
+        k = _nearest(s_bp, flat)
         out = np.where(np.abs(s_bp[k] - flat) <= 1e-12 * max(1.0, self.length), bps[k], np.nan)
         todo = np.flatnonzero(np.isnan(out))
         if todo.size:
@@ -281,7 +281,7 @@ class SectionTrace:
                 mid = 0.5 * (lo + hi)
                 below = self.evaluate(mid, geometry=False)["s"] < flat[todo]
                 lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
-            near = bps[np.argmin(np.abs(bps[:, None] - hi[None, :]), axis=0)]
+            near = bps[_nearest(bps, hi)]
             out[todo] = np.where(np.abs(near - hi) <= 1e-9 * max(1.0, self.duration), near, hi)
         return float(out[0]) if target.ndim == 0 else out.reshape(target.shape)
 
@@ -305,6 +305,22 @@ class SectionTrace:
             "direction": self.direction, "speed": self.speed, "glide": self.glide,
             "phases": phases, "residuals": self.residuals, "metrics": self.metrics,
         }
+
+
+def _nearest(values: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """For each of ``x``, the index of the nearest of ``values`` (the first of several equally near).
+
+    ``np.argmin(np.abs(values[:, None] - x[None, :]), axis=0)``, without its ``values.size`` by
+    ``x.size`` matrix where ``values`` increase: the nearest is then a neighbour of where ``x`` would
+    be inserted (the rounded distance is monotone on each side), and the first index of its value.
+    A section of 4,712 spirals asked for 4,711 lengths among 4,714 breakpoints: 0.7 s and 200 MB.
+    """
+    if values.size < 2 or np.any(np.diff(values) < 0.0):  # not in order (not seen): every pair compared
+        return np.argmin(np.abs(values[:, None] - x[None, :]), axis=0)
+    right = np.minimum(np.searchsorted(values, x, side="left"), values.size - 1)
+    left = np.maximum(right - 1, 0)
+    nearer = np.where(np.abs(values[left] - x) <= np.abs(values[right] - x), left, right)
+    return np.searchsorted(values, values[nearer], side="left")
 
 
 def trace_section(
