@@ -221,6 +221,62 @@ def test_deviation_falls_like_h4_on_a_smooth_spiral_span():
     assert devs[0] / devs[1] > 8 and devs[1] / devs[2] > 8, devs
 
 
+def arches(n: int = 4) -> Path:
+    """``n`` Bézier arches joined tangentially, up and down: the curvature peaks sharply (radius 0.77
+    against 7 and more elsewhere) at each arch's top and jumps where the arches meet."""
+    return Path(tuple(BezierPiece(((10.0 * k, 0.0), (10.0 * k + 3.6, (-20.0, 20.0)[k % 2]),
+                                   (10.0 * k + 6.4, (-20.0, 20.0)[k % 2]), (10.0 * k + 10.0, 0.0)))
+                      for k in range(n)), name="arches")
+
+
+#: The control points of a quadratic Bézier of the SVG corpus (vpype-few-quad-beziers.svg, path 6): it
+#: runs out some 1,900 units and back, its tip a hairpin of radius about 1e-3 of its length.
+HAIRPIN = ((1151.9704537892883, -1911.6237888459702), (201.99325677294033, -347.76494685913326),
+           (1093.4026869946988, -1827.5314414984855))
+
+
+def test_knots_follow_the_turn_in_a_gently_graded_mesh():
+    """Knots crowd where the curvature peaks, and no interval is much longer than its neighbour."""
+    path = arches(1)
+    [run], _ = _split(path, 0.5)
+    geom = exact_runs.RunGeom(path.pieces, run, "test")
+    for span in geom.spans:
+        for n in (8, 64):
+            s = span._knots(n)
+            h = np.diff(s)
+            assert s[0] == 0.0 and s[-1] == span.length and np.all(h > 0) and s.size == n + 1
+            assert np.max(h[1:] / h[:-1]) < 2.0 and np.max(h[:-1] / h[1:]) < 2.0
+            # each span runs from an end of the arch to its top, where the curvature peaks
+            peak = -1 if span.span.reason != "extremum" else 0
+            assert h[peak] == np.min(h) and h[peak] < 0.5 * span.length / n
+
+
+def test_a_sharply_bent_span_needs_fewer_knots_than_uniform_ones_would():
+    """Four arches within 1e-7 of their length: 1,536 spirals (knots uniform in length needed 6,144)."""
+    path = arches()
+    fit = fit_exact_path(path, 4e-6)
+    assert fit.success and fit.deviation <= 4e-6
+    assert fit.n_spirals <= 2048
+
+
+def test_a_hairpin_tip_is_fitted_and_its_overshooting_splines_are_not_laid_out(monkeypatch):
+    """A spline through too few knots about a hairpin overshoots by millions of radians between them;
+    such a layout is refined without being laid out (its samples would take gigabytes), and the tip is
+    fitted to 1e-7 of its length."""
+    deviations = []
+    evaluate = exact_runs.RunGeom.evaluate
+
+    def recorded(self, start, ns):
+        out = evaluate(self, start, ns)
+        deviations.append(out.deviation)
+        return out
+
+    monkeypatch.setattr(exact_runs.RunGeom, "evaluate", recorded)
+    fit = fit_exact_path(Path((BezierPiece(HAIRPIN),), name="hairpin"), 1e-4)
+    assert fit.success and fit.deviation <= 1e-4
+    assert math.isinf(deviations[0]) and all(math.isfinite(d) for d in deviations[1:])
+
+
 # --------------------------------------------------------------------------------------------------
 # Runs, corners and figures
 # --------------------------------------------------------------------------------------------------

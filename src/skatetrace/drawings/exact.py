@@ -13,9 +13,12 @@ and the figure :mod:`skatetrace.drawings.exact_figure`.
    (:func:`skatetrace.drawings.splitting.split_path`).
 2. A span of constant curvature ("arc" or "line") becomes one Segment of the span's curvature and
    length. A "spiral" span becomes a chain of Spirals: its curvature kappa(s) is sampled at knots
-   uniform in arc length s (arc length of the source by adaptive 5-point Gauss-Legendre, knots
-   found by inverting s(t) with safeguarded Newton steps to rounding) and interpolated by a
-   not-a-knot cubic spline; each spline interval is one Spiral. Curvature is therefore continuous,
+   in arc length s (arc length of the source by adaptive 5-point Gauss-Legendre, knots found by
+   inverting s(t) with safeguarded Newton steps to rounding) and interpolated by a not-a-knot
+   cubic spline; each spline interval is one Spiral. The knots are uniform in the mean of the arc
+   length and the absolute turn, so that they crowd where the curvature peaks (a Bézier's sharp
+   top, a hairpin), their spacing kept from growing by more than half the distance
+   (:data:`~skatetrace.drawings.exact_spans.GRADING`). Curvature is therefore continuous,
    with a continuous derivative, inside a span; it may jump where spans of different source pieces
    meet (a G1 join of two Béziers, say), as it does on the source. Two refinements of that rule:
    a spline through points (:class:`~skatetrace.drawings.curves.SplinePiece`, whose curvature or its slope
@@ -40,10 +43,13 @@ of itself there) and on quadrature and rounding of order 1e-15 of the size. Erro
 along a run, so the bound measures the laid-out figure, not each piece on its own.
 
 Refinement. A spiral span starts with ``max(2, ceil(|turn| / 0.25), ceil(8 L_span / L_run))``
-intervals. While a run's deviation exceeds its share of ``tol`` (``tol`` times the fraction of the
-path's length up to the run's end, so that the start offset carried into later runs leaves them
-room), the spans that contribute most (their own heading error integrated over the span, plus the
-heading error at their end times the rest of the run) get their intervals doubled. The error of
+intervals. A layout whose spline overshoots between its knots (a piece turning by more than
+:data:`~skatetrace.drawings.exact_runs.OVERSHOOT` radians) is not laid out: its deviation counts as
+infinite and its spans are refined first. While a run's deviation exceeds its share of ``tol``
+(``tol`` times the fraction of the path's length up to the run's end, so that the start offset
+carried into later runs leaves them room), the spans that contribute most (their own heading error
+integrated over the span, plus the heading error at their end times the rest of the run) get their
+intervals doubled. The error of
 a smooth span falls like ``h^4`` in the knot spacing ``h`` (only like ``sqrt(h)`` next to a cusp).
 Refinement stops before ``max_pieces`` (``MAX_PIECES``) pieces per path, or when more knots stop
 helping: what remains comes from arcs, lines, kinks within ``corner_tol_deg`` or a carried offset,

@@ -20,11 +20,14 @@ from .exact_spans import SpanGeom, subspans
 from .corners import _wrap
 from .curves import _noisy
 from .splitting import Run
-from ..figures.geometry import Pose, travel
+from ..figures.geometry import Pose, Spiral, travel
 
 __all__ = ["RunGeom", "RunResult", "refine"]
 
 _TWO_PI = 2.0 * math.pi
+#: A spline piece that turns more than this (radians, its largest curvature times its length) overshoots:
+#: a source span between two extrema of its curvature turns by less than a turn or two.
+OVERSHOOT = 1e4
 
 
 def _wrap_array(a: np.ndarray) -> np.ndarray:
@@ -56,6 +59,14 @@ class RunGeom:
         return [g.initial(max(self.length, 1e-300)) for g in self.spans]
 
     def evaluate(self, start: Pose, ns: Sequence[int]) -> _Eval:
+        wild = [any(isinstance(p, Spiral) and p.max_abs_curvature() * p.length > OVERSHOOT for p in g.pieces(n))
+                for g, n in zip(self.spans, ns)]
+        if any(wild):
+            # a spline that overshoots wildly between its knots: not laid out (its samples and cells would
+            # run to billions); its spans are refined first
+            own = np.where(wild, math.inf, 0.0)
+            pieces = tuple(p for g, n in zip(self.spans, ns) for p in g.pieces(n))
+            return _Eval(pieces, start, math.inf, math.inf, (start.x, start.y), 0.0, own, 0.0)
         pose = start
         pieces: list = []
         ex, ey, eh, s_all, sx, sy, sh = [], [], [], [], [], [], []
