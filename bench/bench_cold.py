@@ -1,6 +1,6 @@
 """Benchmark: school figures and example drawings from a cold CLI start, as multiples of the double flower (issue 18).
 
-Run: python bench/bench_cold.py [NAME ...] [--timeout S] [--flower-runs K] [--heights H ...] [--corpus]
+Run: python bench/bench_cold.py [NAME ...] [--timeout S] [--flower-runs K] [--heights H ...] [--corpus] [--exact]
 
 Each command runs as a user runs it, in a fresh interpreter: ``skatetrace trace FIGURE ...
 --no-plots --no-viewer`` into an empty folder, with the default planner (``--reach auto`` for a
@@ -12,9 +12,10 @@ resident memory (``VmHWM`` of its main process, read every 20 ms; the planner's 
 worker processes are not counted). A command still running after ``--timeout`` seconds is
 stopped and reported as such (its ratio is at least the timeout's). Nothing is asserted about time.
 
-``--heights H ...`` and ``--corpus`` add figures that no default was tuned on: every school
-figure for skaters of those heights, and every drawing of ``tests/data/svg-corpus`` at 6 m within
-1 mm; the last line counts the commands within issue 18's 5x.
+``--heights H ...``, ``--corpus`` and ``--exact`` add figures that no default was tuned on: every
+school figure for skaters of those heights, every drawing of ``tests/data/svg-corpus`` at 6 m
+within 1 mm, and every such drawing in exact mode (``--exact``: its curvature splines within 1e-7
+of its size); the last line counts the commands within issue 18's 5x.
 """
 
 from __future__ import annotations
@@ -44,14 +45,14 @@ TARGET_RATIO = 5.0
 CORPUS = ROOT / "tests" / "data" / "svg-corpus"
 
 
-def commands(heights=(), corpus: bool = False) -> dict[str, list[str]]:
+def commands(heights=(), corpus: bool = False, exact: bool = False) -> dict[str, list[str]]:
     """Every measured command's arguments after ``skatetrace trace``, by name (the double flower excluded).
 
     By default the school figures of a 1.7 m skater and the example drawings, issue 18's targets.
     ``heights`` adds every school figure for a skater of each of those heights
     (``school:NAME@H``), and ``corpus`` every drawing of ``tests/data/svg-corpus`` scaled to 6 m
     within 1 mm (``corpus:FILE``): figures that no default of the planner or the tracer was tuned
-    on, as a user's would be.
+    on, as a user's would be; ``exact`` each of those drawings in exact mode (``corpus-exact:FILE``).
     """
     out = {f"school:{name}": [f"school:{name}", "--height", "1.7"] for name in school_names()}
     for name, (args, _what) in EXAMPLES.items():
@@ -63,6 +64,9 @@ def commands(heights=(), corpus: bool = False) -> dict[str, list[str]]:
     if corpus:
         for path in sorted(CORPUS.glob("*.svg")):
             out[f"corpus:{path.name}"] = [str(path.relative_to(ROOT)), "--size", "6m", "--tol", "1mm"]
+    if exact:
+        for path in sorted(CORPUS.glob("*.svg")):
+            out[f"corpus-exact:{path.name}"] = [str(path.relative_to(ROOT)), "--size", "6m", "--tol", "1mm", "--exact"]
     return out
 
 
@@ -121,8 +125,11 @@ def main(argv=None) -> dict:
                     help="also every school figure for a skater this tall (m): school:NAME@H")
     ap.add_argument("--corpus", action="store_true",
                     help="also every drawing of tests/data/svg-corpus at --size 6m --tol 1mm: corpus:FILE")
+    ap.add_argument("--exact", action="store_true",
+                    help="also every drawing of tests/data/svg-corpus in exact mode (as --corpus, with --exact): "
+                         "corpus-exact:FILE")
     args = ap.parse_args(argv)
-    every = commands(args.heights, args.corpus)
+    every = commands(args.heights, args.corpus, args.exact)
     unknown = [n for n in args.names if n not in every]
     if unknown:
         ap.error(f"unknown name(s) {', '.join(unknown)}; choose from {', '.join(every)}")

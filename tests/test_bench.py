@@ -175,6 +175,10 @@ def test_bench_cold_times_each_command_against_the_flower_and_stops_one_past_its
     drawings = {k: v for k, v in more.items() if k.startswith("corpus:")}
     assert len(drawings) == len(list(bench.CORPUS.glob("*.svg"))) > 50
     assert all((bench.ROOT / v[0]).is_file() and v[1:] == ["--size", "6m", "--tol", "1mm"] for v in drawings.values())
+    exact = {k: v for k, v in bench.commands(exact=True).items() if k.startswith("corpus-exact:")}
+    same = {k.split(":", 1)[1]: v for k, v in drawings.items()}
+    assert {k.split(":", 1)[1]: v[:-1] for k, v in exact.items()} == same
+    assert all(v[-1] == "--exact" for v in exact.values())
     out = bench.main(["flower-with-stems", "--flower-runs", "1"])
     (row,) = out["rows"]
     assert out["flower"]["returncodes"] == [0] and row["returncode"] == 0 and not row["timed_out"]
