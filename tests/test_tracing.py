@@ -845,3 +845,16 @@ def test_nearest_breakpoint_is_argmins_first_nearest_without_the_matrix():
         assert np.array_equal(_nearest(v, x), np.argmin(np.abs(v[:, None] - x[None, :]), axis=0))
         w = rng.permutation(v)
         assert np.array_equal(_nearest(w, x), np.argmin(np.abs(w[:, None] - x[None, :]), axis=0))
+
+
+def test_a_failed_sections_pieces_are_named_in_short():
+    from types import SimpleNamespace
+
+    from skatetrace.tracing.sections import _indices
+
+    def pieces(*idx):
+        return [SimpleNamespace(index=i) for i in idx]
+
+    assert _indices(pieces(3, 4, 5)) == "[3, 4, 5]"
+    assert _indices(pieces(*range(1824, 5357))) == "[1824..5356]"
+    assert _indices(pieces(1, 2, 3, 4, 9)) == "[1, 2, 3, 4, 9]"

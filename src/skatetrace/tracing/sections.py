@@ -604,7 +604,7 @@ class FigureTrace:
         bad = [s for s in self.sections if not s.success]
         if not bad:
             return f"all {len(self.sections)} sections traced exactly"
-        return "; ".join(f"curve {s.curve_index} pieces {[p.index for p in s.section.pieces]}: {s.message}" for s in bad)
+        return "; ".join(f"curve {s.curve_index} pieces {_indices(s.section.pieces)}: {s.message}" for s in bad)
 
     @property
     def duration(self) -> float:
@@ -612,6 +612,14 @@ class FigureTrace:
             return 0.0
         last = self.sections[-1]
         return self.start_times[-1] + (last.duration if last.phases else 0.0)
+
+
+def _indices(pieces) -> str:
+    """The pieces' indices for a message: ``[3, 4, 5]``, or ``[1824..5356]`` for a long consecutive run."""
+    idx = [p.index for p in pieces]
+    if len(idx) > 4 and idx == list(range(idx[0], idx[0] + len(idx))):
+        return f"[{idx[0]}..{idx[-1]}]"
+    return str(idx)
 
 
 def trace_figure(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
