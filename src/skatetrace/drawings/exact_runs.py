@@ -63,10 +63,8 @@ class RunGeom:
                 for g, n in zip(self.spans, ns)]
         if any(wild):
             # a spline that overshoots wildly between its knots: not laid out (its samples and cells would
-            # run to billions); its spans are refined first
-            own = np.where(wild, math.inf, 0.0)
-            pieces = tuple(p for g, n in zip(self.spans, ns) for p in g.pieces(n))
-            return _Eval(pieces, start, math.inf, math.inf, (start.x, start.y), 0.0, own, 0.0)
+            # run to billions), nor kept as a layout to draw; its spans are refined first
+            return _Eval((), start, math.inf, math.inf, (start.x, start.y), 0.0, np.where(wild, math.inf, 0.0), 0.0)
         pose = start
         pieces: list = []
         ex, ey, eh, s_all, sx, sy, sh = [], [], [], [], [], [], []

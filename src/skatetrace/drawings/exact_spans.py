@@ -227,7 +227,7 @@ class SpanGeom:
 
         The density of knots is the mean of a uniform one and one proportional to the absolute
         curvature (equal turn between knots); the spacing is then kept from growing by more than
-        :data:`GRADING` times the distance (each interval at most about 1.5 times its neighbour), since
+        :data:`GRADING` times the distance (each interval at most about 1.7 times its neighbour), since
         a cubic spline through knots of very unequal spacing overshoots between them (a quadratic
         Bezier's hairpin tip took half the knots and left the next interval 1e4 times longer).
         """
