@@ -274,7 +274,7 @@ def test_a_hairpin_tip_is_fitted_and_its_overshooting_splines_are_not_laid_out(m
     monkeypatch.setattr(exact_runs.RunGeom, "evaluate", recorded)
     fit = fit_exact_path(Path((BezierPiece(HAIRPIN),), name="hairpin"), 1e-4)
     assert fit.success and fit.deviation <= 1e-4
-    assert math.isinf(deviations[0]) and all(math.isfinite(d) for d in deviations[1:])
+    assert math.isinf(deviations[0]) and math.isfinite(deviations[-1])  # (the second's pieces turn 9e3 rad)
     # refined no further, it fails cleanly, keeping no overshooting layout
     fit = fit_exact_path(Path((BezierPiece(HAIRPIN),), name="hairpin"), 1e-4, max_pieces=20)
     assert not fit.success and fit.status is ExactStatus.PIECE_LIMIT and math.isinf(fit.deviation)
