@@ -44,7 +44,7 @@ along a run, so the bound measures the laid-out figure, not each piece on its ow
 
 Refinement. A spiral span starts with ``max(2, ceil(|turn| / 0.25), ceil(8 L_span / L_run))``
 intervals. A layout whose spline overshoots between its knots (a piece turning by more than
-:data:`~skatetrace.drawings.exact_runs.OVERSHOOT` radians) is not laid out: its deviation counts as
+:data:`~skatetrace.drawings.exact_spans.OVERSHOOT` radians) is not laid out: its deviation counts as
 infinite and its spans are refined first. While a run's deviation exceeds its share of ``tol``
 (``tol`` times the fraction of the path's length up to the run's end, so that the start offset
 carried into later runs leaves them room), the spans that contribute most (their own heading error

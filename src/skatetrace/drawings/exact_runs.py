@@ -20,14 +20,11 @@ from .exact_spans import SpanGeom, subspans
 from .corners import _wrap
 from .curves import _noisy
 from .splitting import Run
-from ..figures.geometry import Pose, Spiral, travel
+from ..figures.geometry import Pose, travel
 
 __all__ = ["RunGeom", "RunResult", "refine"]
 
 _TWO_PI = 2.0 * math.pi
-#: A spline piece that turns more than this (radians, its largest curvature times its length) overshoots:
-#: a source span between two extrema of its curvature turns by less than a turn or two.
-OVERSHOOT = 1e4
 
 
 def _wrap_array(a: np.ndarray) -> np.ndarray:
@@ -59,8 +56,7 @@ class RunGeom:
         return [g.initial(max(self.length, 1e-300)) for g in self.spans]
 
     def evaluate(self, start: Pose, ns: Sequence[int]) -> _Eval:
-        wild = [any(isinstance(p, Spiral) and p.max_abs_curvature() * p.length > OVERSHOOT for p in g.pieces(n))
-                for g, n in zip(self.spans, ns)]
+        wild = [g.overshoots(n) for g, n in zip(self.spans, ns)]
         if any(wild):
             # a spline that overshoots wildly between its knots: not laid out (its samples and cells would
             # run to billions), nor kept as a layout to draw; its spans are refined first

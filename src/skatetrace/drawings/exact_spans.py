@@ -31,6 +31,9 @@ SAMPLES = 16  # deviation samples per piece (per half radian of turn, for long a
 START_TURN = 0.25  # radians of turn per spline interval to start with
 START_DENSITY = 8  # spline intervals per run length to start with
 GRADING = 0.5  # the largest growth of the knots' spacing per unit length (see SpanGeom._knots)
+#: A spline piece that turns more than this (radians, its largest curvature times its length) overshoots:
+#: a source span between two extrema of its curvature turns by less than a turn or two.
+OVERSHOOT = 1e4
 
 
 def _clean(c) -> tuple[float, float, float, float]:
@@ -59,6 +62,7 @@ class SpanGeom:
         self.piecewise = _breakpoints(piece).size > 0
         self.cusps = (False, False) if not self.spiral else (self._cusp_end(span.t0), self._cusp_end(span.t1))
         self._pieces: dict[int, tuple] = {}
+        self._overshoots: dict[int, bool] = {}
         self._samples: dict[int, _Samples] = {}
 
     def _table(self) -> tuple[np.ndarray, np.ndarray]:
@@ -186,6 +190,13 @@ class SpanGeom:
                 out = self._spline(n)
             self._pieces[n] = out
         return self._pieces[n]
+
+    def overshoots(self, n: int) -> bool:
+        """Whether a piece of the span cut into ``n`` turns by more than :data:`OVERSHOOT` radians."""
+        if n not in self._overshoots:
+            self._overshoots[n] = any(isinstance(p, Spiral) and p.max_abs_curvature() * p.length > OVERSHOOT
+                                      for p in self.pieces(n))
+        return self._overshoots[n]
 
     def _spline(self, n: int) -> tuple:
         L, (c0, c1) = self.length, self.cusps

@@ -42,7 +42,7 @@ import numpy as np
 from scipy.optimize import brentq, root
 
 from ..dynamics.integrator import DenseSolution, final_state, integrate_legs
-from ..dynamics.model import SleighParams, curvature_coefficients, holding_rates, velocities
+from ..dynamics.model import SleighParams, curvature_coefficients, holding_rates, singular_point, velocities
 
 __all__ = ["Leg", "ManeuverSolution", "glide_state", "constrained_rates", "solve_stop"]
 
@@ -578,7 +578,7 @@ def solve_stop(
     kappa = legs_spec[0][0][0]
     kind = "launch" if backward else "stop"
     a0, b0 = glide_ab
-    sa, sb = 0.0, -kappa * params.I / params.M
+    sa, sb = singular_point(params, kappa)
     if math.hypot(a0 - sa, b0 - sb) <= singular_limit * params.length_scale:
         return ManeuverSolution(
             kind=kind, success=False, params=(math.nan,), duration=math.nan, legs=(), nfev=0,

@@ -377,8 +377,9 @@ def trace_section(
         before, after = legs_from_apex(segs, g, ell_g)
         glide = {"segment": g, "a": glide_ab[0], "b": glide_ab[1], "length": Lg - 2.0 * ell_g,
                  "kappa": kg, "speed": options.speed}
-        if apex_singular_distance(params, kg, glide_ab) <= clearance:
-            return Attempt(_near_singular(params, section, options, curve_index, glide, clearance), 0)
+        distance = apex_singular_distance(params, kg, glide_ab)
+        if distance <= clearance:
+            return Attempt(_near_singular(params, section, options, curve_index, glide, distance, clearance), 0)
         kwf = dict(kw, fallback=fallback)
         with np.errstate(divide="ignore", invalid="ignore"):
             stop = solve_stop(params, after, glide_ab, 1.0, **kwf)
@@ -441,15 +442,16 @@ def _launch(params: SleighParams, before, after, glide_ab, stop: ManeuverSolutio
     return solve_stop(params, before, glide_ab, 1.0, backward=True, **kw)
 
 
-def _near_singular(params, section, options, curve_index, glide, clearance) -> SectionTrace:
-    """The failure of a placement whose apex is within ``clearance`` of its curvature's singular point, not solved.
+def _near_singular(params, section, options, curve_index, glide, distance, clearance) -> SectionTrace:
+    """The failure of a placement whose apex is ``distance`` (within ``clearance``) from its curvature's singular
+    point, not solved.
 
     See :data:`~skatetrace.tracing.placements.APEX_CLEARANCE`: its manoeuvres would start where the
     control rates grow without bound, and the weak ramps' integrations crawl there.
     """
     a, b, kappa = glide["a"], glide["b"], glide["kappa"]
     message = (f"the glide's mass position ({a:.6g}, {b:.6g}) is "
-               f"{apex_singular_distance(params, kappa, (a, b)):.3g} from the singular point "
+               f"{distance:.3g} from the singular point "
                f"(0, {singular_point(params, kappa)[1]:.6g}) of its curvature {kappa:.6g}, within {APEX_CLEARANCE:g} "
                f"singular limits ({clearance:.3g}): not solved")
     return SectionTrace(success=False, status=TraceStatus.SINGULAR, message=message, curve_index=curve_index,
