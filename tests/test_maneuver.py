@@ -179,6 +179,14 @@ def test_polish_gives_up_where_it_stalls(monkeypatch):
 # ---- issue 6: the faster solve finds the same manoeuvres ---------------------------------------
 
 
+def _chain(coefficients, length, n):
+    """A spiral's legs ``[(coefficients, length), ...]`` cut into ``n`` equal legs (its curvature continuous)."""
+    from skatetrace.figures.geometry import shifted_polynomial
+
+    h = length / n
+    return [(shifted_polynomial(coefficients, i * h, 1.0), h) for i in range(n)]
+
+
 def _full_scan_brackets(params, legs, glide_ab, backward=False):
     """The first bracket of each sign on the whole grid, every point integrated (the scan before issue 6)."""
     from skatetrace.tracing import maneuver
@@ -212,6 +220,8 @@ def _full_scan_brackets(params, legs, glide_ab, backward=False):
     ([(1.25, 0.25)], (2.507964473723101, 0.0), True),  # the paper's second arc: a launch
     ([(0.0, 1.0)], (3.0, 0.0), False),  # a line
     ([((0.2, 0.3, 0.0, 0.0), 1.0)], (0.0, 1.0), False),  # a clothoid
+    (_chain((0.2, 0.3, 0.0, 0.0), 1.0, 4), (0.0, 1.0), False),  # the clothoid cut into four legs
+    (_chain((0.8, -1.6, 0.0, 0.4), 1.0, 8), (0.0, 1.0), True),  # a cubic through an inflection, in eight
 ])
 def test_stop_is_the_first_root_of_the_full_scan_polished_to_rounding(legs, glide_ab, backward):
     p = SleighParams()
@@ -233,7 +243,7 @@ def test_stop_is_the_first_root_of_the_full_scan_polished_to_rounding(legs, glid
 
 
 def test_mirrored_stop_is_the_launch_bit_for_bit():
-    from skatetrace.tracing.maneuver import mirrored_maneuver
+    from skatetrace.tracing.mirror import mirrored_maneuver
 
     p = SleighParams()
     for legs, (a, b) in [([(1.0, 1.0)], (0.0, 0.3)), ([(1.25, 0.25)], (2.507964473723101, 0.0)),
@@ -251,7 +261,7 @@ def test_mirrored_stop_is_the_launch_bit_for_bit():
 
 
 def test_same_legs_compares_curvature_polynomials_and_lengths():
-    from skatetrace.tracing.maneuver import same_legs
+    from skatetrace.tracing.mirror import same_legs
 
     assert same_legs([(1.0, 2.0)], [((1.0, -0.0, 0.0, -0.0), 2.0)])
     assert not same_legs([(1.0, 2.0)], [(1.0, 2.5)])
@@ -440,3 +450,31 @@ def test_the_ramps_below_the_grid_are_scanned_only_where_the_grid_has_no_bracket
     a0 = 2.0 * (p.M + p.m) / p.m * 2.5e-4 + p.length_scale
     assert solve_stop(p, [(0.0, 2.5e-4)], (a0, 0.0), 1.0).success  # half a line of 0.5 mm
     assert any(g < maneuver._GRID[0] * 1e-3 for g in scanned)
+
+
+def test_the_scan_is_coarse_where_the_curvature_is_continuous_at_every_join(monkeypatch):
+    from skatetrace.tracing import maneuver
+
+    assert maneuver._continuous([((1.0, 0.0, 0.0, 0.0), math.inf)])
+    clothoid = [(maneuver._coefficients(k), ell) for k, ell in _chain((0.2, 0.3, 0.0, 0.0), 1.0, 4)]
+    spec = [(k, 0.25 * (i + 1) if i < 3 else math.inf) for i, (k, _ell) in enumerate(clothoid)]
+    assert maneuver._continuous(spec)
+    # an inflection at a join: both sides are rounding, of either sign
+    assert maneuver._continuous([((1.0, -2.0, 0.0, 0.0), 0.5), ((-1.4e-16, -2.0, 0.0, 0.0), math.inf)])
+    assert not maneuver._continuous([((1.0, 0.0, 0.0, 0.0), 0.5), ((0.0, 0.0, 0.0, 0.0), math.inf)])  # arc, line
+    assert not maneuver._continuous([((1.0, 0.0, 0.0, 0.0), 0.5), ((1.0 + 1e-9, 0.0, 0.0, 0.0), math.inf)])
+
+    strides = []
+    real = maneuver._scan
+
+    def recorded(stopper, grid, length, coarse):
+        strides.append(coarse)
+        return real(stopper, grid, length, coarse)
+
+    monkeypatch.setattr(maneuver, "_scan", recorded)
+    p = SleighParams()
+    assert solve_stop(p, _chain((0.2, 0.3, 0.0, 0.0), 1.0, 4), (0.0, 1.0), 1.0).success
+    assert strides and set(strides) == {maneuver._COARSE}
+    strides.clear()
+    assert solve_stop(p, [(0.5, 0.5), (0.25, 0.5)], (0.0, 1.0), 1.0).success  # an arc into a wider one
+    assert strides and set(strides) == {1}

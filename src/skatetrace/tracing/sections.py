@@ -36,7 +36,8 @@ from ..figures.geometry import travel
 from ..processes import run_jobs
 from .leg_motion import leg_motion
 from .leg_motion import load as load_leg_motion
-from .maneuver import ManeuverSolution, glide_state, mirrored_maneuver, same_legs, solve_stop
+from .maneuver import ManeuverSolution, glide_state, solve_stop
+from .mirror import mirrored_maneuver, same_legs
 from .options import BRIEF_PLACEMENTS, LONG_SECTION, SHORT_SECTION, TraceOptions
 from .placements import APEX_CLEARANCE, apex_singular_distance, auto_maneuver_length, glide_candidates, legs_from_apex
 from .search import Attempt, outreaches, search_placements
@@ -434,7 +435,7 @@ def _launch(params: SleighParams, before, after, glide_ab, stop: ManeuverSolutio
     """The launch over ``before`` to the apex ``glide_ab`` whose stop over ``after`` is ``stop`` (found).
 
     With the mass at ``a = 0`` and the same curve on both sides of the apex the launch is the
-    stop reversed in time (:func:`~skatetrace.tracing.maneuver.mirrored_maneuver`), exactly: it is not
+    stop reversed in time (:func:`~skatetrace.tracing.mirror.mirrored_maneuver`), exactly: it is not
     solved a second time.
     """
     if glide_ab[0] == 0.0 and same_legs(before, after):
