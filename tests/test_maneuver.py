@@ -478,3 +478,25 @@ def test_the_scan_is_coarse_where_the_curvature_is_continuous_at_every_join(monk
     strides.clear()
     assert solve_stop(p, [(0.5, 0.5), (0.25, 0.5)], (0.0, 1.0), 1.0).success  # an arc into a wider one
     assert strides and set(strides) == {1}
+
+
+def test_brent_ends_at_its_first_iterate_that_stops_within_the_scan_accuracy():
+    from skatetrace.tracing import maneuver
+
+    root, length = 3.7, 0.8
+    runs = []
+
+    def stopping_length(alpha):  # smooth and monotone, not linear in log alpha (Brent needs several steps)
+        x = math.log(alpha / root)
+        return length * math.exp(-x - 0.3 * x * x)
+
+    class Fake:
+        def run(self, alpha, rtol, atol):
+            runs.append(alpha)
+            return 1.0, np.array([0.0, 0.0, 0.0, 0.0, stopping_length(alpha)])
+
+    grid = np.array([1.0, 10.0])
+    alpha, _tau, slope = maneuver._scan_root(Fake(), grid, 0, 1, lambda k: (stopping_length(grid[k]), 1.0), length)
+    close = [abs(math.log(stopping_length(a) / length)) <= maneuver._SCAN_CLOSE for a in runs]
+    assert close[-1] and not any(close[:-1]) and alpha == runs[-1]
+    assert abs(alpha / root - 1.0) < 1e-8 and slope < 0.0

@@ -249,6 +249,10 @@ _SCAN_RTOL, _SCAN_ATOL = 1e-9, 1e-11
 # adjacent floating-point numbers took some fifteen integrations; this takes two or three.
 _SCAN_XTOL = 1e-9
 _SECANT_STEPS = 8
+# Brent's method ends early at an iterate whose stop falls within this share of the length (in
+# log): as close as the scan's accuracy tells. Its last steps only shrink the bracket to _SCAN_XTOL
+# about a root it has already met, two or three integrations of some five to eight.
+_SCAN_CLOSE = 1e-9
 # A grid point's integration is given up once the blade has run this many times the length
 # without stopping (a weak ramp glides on for most of the time allowed, some ten times the cost
 # of a stop near the length); such a point stands for "farther, or never" (_FAR) where that
@@ -259,6 +263,10 @@ _FAR = "far"
 
 class _NoStop(Exception):
     """An integration that did not end with the speed vanishing (no stop, singular, failure)."""
+
+
+class _Close(Exception):
+    """Brent's iterate ``x`` (``args``) stops within :data:`_SCAN_CLOSE` of the length: the root, to the scan's accuracy."""
 
 
 class _Beyond(_NoStop):
@@ -359,10 +367,15 @@ def _scan_root(stopper, grid, i, j, length_at, length):
         if x not in seen:
             tau, yf = stopper.run(direction * math.exp(x), _SCAN_RTOL, _SCAN_ATOL)
             seen[x] = (abs(yf[4]), tau)
+            if abs(math.log(max(seen[x][0], 1e-300) / length)) <= _SCAN_CLOSE:
+                raise _Close(x)
         return math.log(max(seen[x][0], 1e-300) / length)
 
     xi, xj = math.log(abs(grid[i])), math.log(abs(grid[j]))
-    x = brentq(excess, xi, xj, xtol=_SCAN_XTOL, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+    try:
+        x = brentq(excess, xi, xj, xtol=_SCAN_XTOL, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+    except _Close as close:
+        (x,) = close.args
     excess(x)
     far = [u for u in seen if abs(u - x) >= 1e-6]
     slope = None
