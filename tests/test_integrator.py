@@ -373,7 +373,7 @@ def _events(coef, alpha, switch, stop, sing, t_old, h, y_old, F, t):
 
     g, work = np.empty(3), np.empty(5)
     y = rk.interpolate_into(t_old, h, y_old, F, t, np.empty(5))
-    _event_values(P.M, P.m, P.I, coef, 0.0, alpha, 0.0, t, y, switch, stop, sing, g, work)
+    _event_values(P.M, P.m, P.I, coef, 0.0, alpha, 0.0, t, y, switch, stop, sing, g, work, np.nan)
     return g
 
 
@@ -384,7 +384,7 @@ def _located(coef, alpha, switch, stop, sing, e, t_old, h, y_old, F):
     g0 = _events(coef, alpha, switch, stop, sing, t_old, h, y_old, F, t_old)[e]
     g1 = _events(coef, alpha, switch, stop, sing, t_old, h, y_old, F, t_old + h)[e]
     root, count = _event_time(P.M, P.m, P.I, coef, 0.0, alpha, 0.0, t_old, h, y_old, F, t_old + h, switch, stop,
-                              sing, e, g0, g1, np.empty(3), np.empty(5), np.empty(5))
+                              sing, e, g0, g1, np.empty(5), np.empty(5))
     return root, count, g0
 
 

@@ -24,8 +24,9 @@ Two terminal events may be armed: the speed along the blade vanishing (``"stoppe
 coming within a distance of the singular point ``(0, -kappa(s) I / M)`` (``"singular"``).
 An event (or a join) is located on its step's dense output to adjacent floating-point numbers,
 as a bisection would, by the false position (:func:`_event_time`): some seven evaluations of the
-event functions where a bisection takes fifty (which was a third of the time of a manoeuvre solve's
-integrations).
+event function where a bisection takes fifty (which was a third of the time of a manoeuvre solve's
+integrations). Only the event being located is evaluated there (a join's needs no right-hand side),
+and at a step's end the speed is the last stage's, not computed again.
 
 Set the environment variable ``NUMBA_DISABLE_JIT=1`` to run the same code as plain Python.
 """
@@ -122,19 +123,36 @@ def _speed(M, m, I, coef, s0, alpha, beta, t, y, work):
 
 
 @njit(cache=True)
-def _event_values(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, g, work):
-    """Event functions at ``(t, y)``: join ``|s| - switch``, speed, singular distance - limit.
+def _event_value(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, e, work):
+    """Event function ``e`` at ``(t, y)``: 0 the join ``|s| - switch``, 1 the speed, 2 the singular distance - limit.
 
-    The singular point ``(0, -kappa I / M)`` moves with the curvature at ``y``'s ``|s|``.
-    ``work`` is a scratch array of 5.
+    The singular point ``(0, -kappa I / M)`` moves with the curvature at ``y``'s ``|s|``. Only the
+    speed needs the right-hand side. ``work`` is a scratch array of 5.
     """
-    g[0] = abs(y[4]) - switch
-    g[1] = _speed(M, m, I, coef, s0, alpha, beta, t, y, work) if stop_event else 1.0
+    if e == 0:
+        return abs(y[4]) - switch
+    if e == 1:
+        return _speed(M, m, I, coef, s0, alpha, beta, t, y, work) if stop_event else 1.0
     if sing_limit > 0.0:
         sing_b = -_curvature(coef, s0, y[4]) * I / M
-        g[2] = math.hypot(y[2], y[3] - sing_b) - sing_limit
+        return math.hypot(y[2], y[3] - sing_b) - sing_limit
+    return 1.0
+
+
+@njit(cache=True)
+def _event_values(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, g, work, speed):
+    """The three event functions at ``(t, y)`` (:func:`_event_value`) into ``g``.
+
+    ``speed`` is the right-hand side's speed ``f[4]`` at the same ``(t, y)`` where the caller has
+    it (the step's last stage, or a leg's first evaluation): the same number, not computed again.
+    NaN computes it.
+    """
+    g[0] = _event_value(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, 0, work)
+    if stop_event and speed == speed:
+        g[1] = speed
     else:
-        g[2] = 1.0
+        g[1] = _event_value(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, 1, work)
+    g[2] = _event_value(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, 2, work)
 
 
 #: Evaluations of the event functions by the false position (:func:`_event_time`) before it gives way to bisection.
@@ -143,7 +161,7 @@ _FALSE_POSITION_STEPS = 12
 
 @njit(cache=True)
 def _event_time(M, m, I, coef, s0, alpha, beta, t, h, y, F, t_new, switch, stop_event, sing_limit, e, g_start, g_end,
-                g, work, yint):
+                work, yint):
     """Where event ``e`` changes sign on the step ``[t, t_new]``, to adjacent floating-point numbers.
 
     The bracket ``[lo, hi]`` keeps ``g[e](lo)`` on the side of ``g_start`` (and nonzero, unless
@@ -174,16 +192,16 @@ def _event_time(M, m, I, coef, s0, alpha, beta, t, h, y, F, t_new, switch, stop_
                 end, other = (lo, hi) if abs(x - lo) <= abs(x - hi) else (hi, lo)
                 x = np.nextafter(end, other)
             mid = x
-        _event_values(M, m, I, coef, s0, alpha, beta, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
-                      stop_event, sing_limit, g, work)
+        value = _event_value(M, m, I, coef, s0, alpha, beta, mid, rk.interpolate_into(t, h, y, F, mid, yint), switch,
+                             stop_event, sing_limit, e, work)
         count += 1
-        if (g[e] <= 0.0) == (glo <= 0.0) and g[e] != 0.0:
-            lo, glo, f_lo = mid, g[e], g[e]
+        if (value <= 0.0) == (glo <= 0.0) and value != 0.0:
+            lo, glo, f_lo = mid, value, value
             if side == -1:
                 f_hi *= 0.5
             side = -1
         else:
-            hi, f_hi = mid, g[e]
+            hi, f_hi = mid, value
             if side == 1:
                 f_lo *= 0.5
             side = 1
@@ -270,7 +288,6 @@ def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_eve
     f_new = np.empty(n)
     g_old = np.empty(3)
     g_new = np.empty(3)
-    g = np.empty(3)
     work = np.empty(n)  # scratch of the event functions
     yint = np.empty(n)  # the dense output where an event is looked for
     Kx = np.empty((16, n))  # scratch of the dense output's extra stages
@@ -284,7 +301,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_eve
         if not _rhs_leg(M, m, I, coef, s0, alpha, beta, t, y, f):
             return _EXHAUSTED, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
         nfev += 1
-        _event_values(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, g_old, work)
+        _event_values(M, m, I, coef, s0, alpha, beta, t, y, switch, stop_event, sing_limit, g_old, work, f[4])
         # Where the curvature is continuous across the join (a chain of spirals) the right-hand side
         # is too, and the step size the last leg proposed carries over; where it jumps the control
         # rates jump, and the step is chosen afresh as scipy would for a new solve_ivp call.
@@ -352,7 +369,9 @@ def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_eve
             if not finite:
                 return _NONFINITE, leg, t, y, leg_bounds, step_t, step_h, step_y, step_F, step_leg, nsteps
             # events: a sign change (or touch of zero) between the step's ends, as in solve_ivp
-            _event_values(M, m, I, coef, s0, alpha, beta, t_new, ynew, switch, stop_event, sing_limit, g_new, work)
+            # f_new is the right-hand side at t + h: the speed there is the event's where that is t_new
+            _event_values(M, m, I, coef, s0, alpha, beta, t_new, ynew, switch, stop_event, sing_limit, g_new, work,
+                          f_new[4] if t + h == t_new else np.nan)
             active = False
             for e in range(3):
                 if (g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0):
@@ -368,7 +387,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_eve
                     if not ((g_old[e] <= 0.0 and g_new[e] >= 0.0) or (g_old[e] >= 0.0 and g_new[e] <= 0.0)):
                         continue
                     root, _count = _event_time(M, m, I, coef, s0, alpha, beta, t, h, y, F, t_new, switch,
-                                               stop_event, sing_limit, e, g_old[e], g_new[e], g, work, yint)
+                                               stop_event, sing_limit, e, g_old[e], g_new[e], work, yint)
                     if hit < 0 or direction * (root - t_hit) < 0.0:
                         hit, t_hit = e, root
             if dense:
