@@ -377,6 +377,15 @@ def profile_section(res: dict, tgt: list[dict]) -> list[str]:
                      f"verify {lf['verify_s'] / tot:.0%}. Simulated duration of the figure {lf['duration']:.0f} "
                      f"time units")
         L += [line + ".", ""] + placeholder_for("long")
+    arcs = [n for n in (1, 1000) if f"arcs_{n}" in unmet]
+    if arcs:
+        rows = {r["pieces"]: r for r in res["scaling"]["pieces"]["rows"] if not r["skipped"]}
+        L += [f"### Distinct arcs traced warm (a single arc <= {ARC_S * 1e3:g} ms, 1000 <= {THOUSAND_S * 1e3:g} ms)",
+              ""]
+        L += [f"- {n} distinct arc{'s' if n > 1 else ''}: {rows[n]['trace_s'] * 1e3:.3g} ms, "
+              f"{rows[n]['nfev']} manoeuvre integrations ({rows[n]['trace_s'] / rows[n]['nfev'] * 1e6:.0f} us each, "
+              "the Python around them included)" for n in arcs]
+        L += [""] + placeholder_for("arcs")
     if unmet & {"linear_trace", "linear_total"}:
         p = res["scaling"]["pieces"]
         L += ["### Linear growth with the number of pieces", ""]

@@ -161,6 +161,16 @@ def test_run_all_smoke(tmp_path, capsys):
     assert "wrote" in capsys.readouterr().out
 
 
+def test_an_unmet_arc_target_gets_its_measured_integrations_and_the_hand_written_profile():
+    mod = _load("run_all")
+    res = {"scaling": {"pieces": {"rows": [{"pieces": 1, "skipped": False, "trace_s": 1.66e-3, "nfev": 55},
+                                           {"pieces": 1000, "skipped": False, "trace_s": 0.645, "nfev": 30_000}]}}}
+    text = "\n".join(mod.profile_section(res, [{"key": "arcs_1", "met": False}, {"key": "arcs_1000", "met": True}]))
+    assert "### Distinct arcs traced warm" in text and "- 1 distinct arc: 1.66 ms, 55 manoeuvre integrations" in text
+    assert "1000 distinct arcs" not in text  # met: not profiled
+    assert mod._hand_analysis()["arcs"] in text and "Placeholder" not in text
+
+
 def test_bench_cold_times_each_command_against_the_flower_and_stops_one_past_its_timeout(capsys):
     # issue 18: every school figure and example drawing, exact mode included, against the double flower
     bench = _load("bench_cold")

@@ -266,7 +266,7 @@ class _NoStop(Exception):
 
 
 class _Close(Exception):
-    """Brent's iterate ``x`` (``args``) stops within :data:`_SCAN_CLOSE` of the length: the root, to the scan's accuracy."""
+    """Brent's iterate ``x`` (``args``) stops within :data:`_SCAN_CLOSE` of the length: the root, as the scan tells."""
 
 
 class _Beyond(_NoStop):
@@ -356,9 +356,11 @@ def _interpolated_guess(grid, i, j, li, lj, length):
 def _scan_root(stopper, grid, i, j, length_at, length):
     """Brent's method at the scan's accuracy for the root on ``grid[i..j]``, in ``log |alpha|``.
 
-    Returns ``(alpha, tau, slope)``: the root, the stopping time there and the slope of the
-    stopping length in alpha (a secant over the nearest point tried at least ``1e-6`` away, where
-    the scan's inaccuracy hardly shows; None if there is none). Raises :class:`_NoStop`.
+    It ends at its first iterate whose stop falls within :data:`_SCAN_CLOSE` of the length, or where
+    its bracket is down to :data:`_SCAN_XTOL`. Returns ``(alpha, tau, slope)``: the root, the
+    stopping time there and the slope of the stopping length in alpha (a secant over the nearest
+    point tried at least ``1e-6`` away, where the scan's inaccuracy hardly shows; None if there is
+    none). Raises :class:`_NoStop`.
     """
     direction = math.copysign(1.0, grid[i])
     seen = {math.log(abs(grid[k])): length_at(k) for k in (i, j)}
