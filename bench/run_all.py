@@ -382,9 +382,11 @@ def profile_section(res: dict, tgt: list[dict]) -> list[str]:
         rows = {r["pieces"]: r for r in res["scaling"]["pieces"]["rows"] if not r["skipped"]}
         L += [f"### Distinct arcs traced warm (a single arc <= {ARC_S * 1e3:g} ms, 1000 <= {THOUSAND_S * 1e3:g} ms)",
               ""]
-        L += [f"- {n} distinct arc{'s' if n > 1 else ''}: {rows[n]['trace_s'] * 1e3:.3g} ms, "
-              f"{rows[n]['nfev']} manoeuvre integrations ({rows[n]['trace_s'] / rows[n]['nfev'] * 1e6:.0f} us each, "
-              "the Python around them included)" for n in arcs]
+        for n in arcs:
+            r = rows[n]
+            L.append(f"- {n} distinct arc{'s' if n > 1 else ''}: {r['trace_s'] * 1e3:.3g} ms, {r['nfev']} manoeuvre "
+                     f"integrations ({r['trace_s'] / max(r['nfev'], 1) * 1e6:.0f} us each, the Python around them "
+                     "included)")
         L += [""] + placeholder_for("arcs")
     if unmet & {"linear_trace", "linear_total"}:
         p = res["scaling"]["pieces"]
