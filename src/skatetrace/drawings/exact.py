@@ -187,6 +187,15 @@ def _fit_runs(path: Path, runs: list[Run], scale: float, tol: float, max_pieces:
         message = (f"path {path.name!r}: {status.value}: run {r} reached a deviation bound of "
                    f"{out[r].deviation:.3g} > tol {tol:.3g} with {len(out[r].pieces)} pieces "
                    f"({len(pieces)} in the path, limit {max_pieces})" + (f"; {why}" if why else ""))
+        if math.isinf(out[r].deviation):
+            message += ("; it kept no layout: every one tried overshoots between its knots (a hairpin tip needs "
+                        "more pieces than that)")
+        later = [i for i in range(r + 1, len(out)) if math.isinf(out[i].deviation)]
+        if later:
+            which = ", ".join(map(str, later[:5])) + (", ..." if len(later) > 5 else "")
+            plural = len(later) > 1
+            message += (f"; after it, run{'s' if plural else ''} {which}, laid out at {'their' if plural else 'its'} "
+                        "first knots only, overshot between them and kept no pieces: the path's deviation is unbounded")
         if geoms[r].noisy:
             message += "; its curvature is a finite difference (noise about 1e-8 relative): give exact derivatives"
         kink = geoms[r].kink_deg()
