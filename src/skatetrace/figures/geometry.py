@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 from .spiral_paths import cell_nodes, foot_points, positions
 
 __all__ = ["Pose", "Segment", "Spiral", "advance", "travel", "segment_points", "distance_to_segment",
-           "rigid_motion_centre", "shifted_polynomial"]
+           "rigid_motion_centre", "shifted_polynomial", "cubic_at"]
 
 _CELL_TURN = 0.2  # largest heading change (radians) over one quadrature cell of a spiral
 
@@ -78,9 +78,7 @@ class Spiral(NamedTuple):
         return not any(self.coefficients[1:])
 
     def curvature_at(self, sigma) -> np.ndarray:
-        c0, c1, c2, c3 = self.coefficients
-        sigma = np.asarray(sigma, dtype=float)
-        return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+        return cubic_at(self.coefficients, np.asarray(sigma, dtype=float))
 
     def heading_change(self, sigma) -> np.ndarray:
         """Turn of the heading from the start to ``sigma`` (the integral of the curvature)."""
@@ -117,6 +115,12 @@ class Spiral(NamedTuple):
     def part(self, s0: float, s1: float) -> "Spiral":
         """The stretch from ``s0`` to ``s1`` (arc lengths from the start), coefficients re-expanded."""
         return Spiral(shifted_polynomial(self.coefficients, s0, 1.0), s1 - s0)
+
+
+def cubic_at(coefficients, x):
+    """``c0 + c1 x + c2 x^2 + c3 x^3`` by Horner's rule, for a number or an array ``x``."""
+    c0, c1, c2, c3 = coefficients
+    return c0 + x * (c1 + x * (c2 + x * c3))
 
 
 def shifted_polynomial(coefficients, origin: float, sign: float) -> tuple[float, ...]:

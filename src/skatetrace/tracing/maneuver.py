@@ -43,6 +43,7 @@ from scipy.optimize import brentq, root
 
 from ..dynamics.integrator import final_state, integrate_legs
 from ..dynamics.model import SleighParams, curvature_coefficients, holding_rates, singular_point, velocities
+from ..figures.geometry import cubic_at
 
 __all__ = ["Leg", "ManeuverSolution", "glide_state", "constrained_rates", "solve_stop"]
 
@@ -64,9 +65,7 @@ class Leg:
 
     def kappa_at(self, s) -> np.ndarray:
         """Curvature at the manoeuvre's arc-length coordinate ``s`` (signed, as integrated)."""
-        sigma = np.abs(np.asarray(s, dtype=float)) - self.s0
-        c0, c1, c2, c3 = self.coefficients
-        return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+        return cubic_at(self.coefficients, np.abs(np.asarray(s, dtype=float)) - self.s0)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -157,9 +156,7 @@ def _continuous(legs_spec) -> bool:
     scale = max(abs(coeffs[0]) for coeffs, _ in legs_spec)
     start = 0.0
     for (coeffs, switch), (following, _) in zip(legs_spec, legs_spec[1:]):
-        c0, c1, c2, c3 = coeffs
-        sigma = switch - start
-        end = c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+        end = cubic_at(coeffs, switch - start)
         if not abs(end - following[0]) <= 1e-12 * max(abs(end), abs(following[0]), scale, 1e-300):
             return False
         start = switch
@@ -173,9 +170,7 @@ def _kappa_at(legs_spec, s: float) -> float:
         if abs(s) <= switch:
             break
         start = switch
-    c0, c1, c2, c3 = coeffs
-    sigma = abs(s) - start
-    return c0 + sigma * (c1 + sigma * (c2 + sigma * c3))
+    return cubic_at(coeffs, abs(s) - start)
 
 
 def _integrate(params, y0, legs_spec, alpha, t_end, *, rtol, atol, stop=False, singular_limit=0.0, dense=True):
