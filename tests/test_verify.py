@@ -37,12 +37,20 @@ def test_figure_to_replay_uses_the_velocity_on_each_side_of_a_jump():
     end = 1.0 + 3.0 * 0.5
     ang = np.linspace(0.0, end, 400)
     points = np.vstack([np.cos(ang), np.sin(ang)])
-    d = figure_to_replay(points, rep, np.ones(times.size, bool), params)
+    d = figure_to_replay(points, rep, np.arange(times.size), params)
     # cubic Hermite interpolation of a circle in 0.1-radian steps is off by about 0.1**4 / 384 = 2.6e-7
     assert d.max() < 1e-6, d.max()
     # the same replay interpolated with the left-hand speed past the jump strays by far more
     bad = _circle_replay(params, np.delete(times, 11), np.delete(speeds, 11))
-    assert figure_to_replay(points, bad, np.ones(times.size - 1, bool), params).max() > 1e-4
+    assert figure_to_replay(points, bad, np.arange(times.size - 1), params).max() > 1e-4
+
+
+def test_figure_to_replay_refuses_a_mask_for_its_row_indices():
+    params = SleighParams()
+    times = np.linspace(0.0, 1.0, 5)
+    rep = _circle_replay(params, times, np.ones(times.size))
+    with pytest.raises(TypeError, match="indices of the replay's rows"):
+        figure_to_replay(np.array([[1.0], [0.0]]), rep, np.ones(times.size, bool), params)
 
 
 def test_figure_to_replay_sees_past_a_run_of_repeated_rows():
@@ -52,7 +60,7 @@ def test_figure_to_replay_sees_past_a_run_of_repeated_rows():
     speeds = np.ones(times.size)
     rep = _circle_replay(params, times, speeds)
     ang = np.linspace(0.0, 2.0, 400)
-    d = figure_to_replay(np.vstack([np.cos(ang), np.sin(ang)]), rep, np.ones(times.size, bool), params)
+    d = figure_to_replay(np.vstack([np.cos(ang), np.sin(ang)]), rep, np.arange(times.size), params)
     assert d.max() < 1e-6, d.max()
 
 
@@ -69,7 +77,7 @@ def test_distance_search_matches_a_brute_force_minimum():
     ang = rng.uniform(0.05, np.sum(np.diff(times) * speeds[:-1]) - 0.05, 300)
     rad = 1.0 + rng.uniform(-0.02, 0.02, 300)
     points = np.vstack([rad * np.cos(ang), rad * np.sin(ang)])
-    d = figure_to_replay(points, rep, np.ones(times.size, bool), params)
+    d = figure_to_replay(points, rep, np.arange(times.size), params)
     hh = np.diff(times)
     vx, vy = v * np.cos(th), v * np.sin(th)
 

@@ -157,7 +157,7 @@ def _exercise_distances() -> None:
     state[1], state[3] = 1.0, np.arange(n, dtype=float)
     rep = Replay(t=np.arange(n, dtype=float), state=state, controls=np.zeros((4, n)), section=np.zeros(n, dtype=int),
                  piece=np.zeros(n, dtype=int))
-    figure_to_replay(np.array([[0.5, 1.5], [0.1, 0.1]]), rep, np.ones(n, dtype=bool), SleighParams())
+    figure_to_replay(np.array([[0.5, 1.5], [0.1, 0.1]]), rep, np.arange(n), SleighParams())
 
 
 #: What compiles each part that :func:`compile_ahead` can compile on its own (without a trace).

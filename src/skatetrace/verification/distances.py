@@ -110,7 +110,7 @@ def _golden_distances(qx, qy, t, x, y, vx, vy, cand, best):
 def figure_to_replay(points: np.ndarray, rep: Replay, rows: np.ndarray, params: SleighParams) -> np.ndarray:
     """Distance from target points (2, k) to the replayed path on ``rows`` of ``rep``.
 
-    ``rows`` is a boolean mask of the replay's rows or their indices, increasing. The nearest dense
+    ``rows`` are indices of the replay's rows, increasing. The nearest dense
     sample is found with a k-d tree; the distance is then minimised over the cubic Hermite
     interpolant of the positions (velocities from the model) on the two adjacent sample intervals,
     by golden-section search (compiled), so the chord error of a polyline does not count.
@@ -120,7 +120,9 @@ def figure_to_replay(points: np.ndarray, rep: Replay, rows: np.ndarray, params: 
     # Both rows are kept, so each interval is interpolated with its own one-sided velocities. For
     # the nearest sample, the two proper intervals (of positive length) before it and the two after
     # it are searched, however many repeated rows lie between.
-    sel = np.flatnonzero(rows) if rows.dtype == bool else rows
+    sel = np.asarray(rows)
+    if sel.dtype.kind not in "iu":
+        raise TypeError(f"rows must be indices of the replay's rows (integers), got an array of {sel.dtype}")
     t = rep.t[sel]
     st = rep.state[:, sel]
     ctl = rep.controls[:, sel]
