@@ -61,12 +61,12 @@ def commands(heights=(), corpus: bool = False, exact: bool = False) -> dict[str,
     for height in heights:
         for name in school_names():
             out[f"school:{name}@{height:g}"] = [f"school:{name}", "--height", f"{height:g}"]
+    drawings = {path.name: [str(path.relative_to(ROOT)), "--size", "6m", "--tol", "1mm"]
+                for path in sorted(CORPUS.glob("*.svg"))}
     if corpus:
-        for path in sorted(CORPUS.glob("*.svg")):
-            out[f"corpus:{path.name}"] = [str(path.relative_to(ROOT)), "--size", "6m", "--tol", "1mm"]
+        out.update({f"corpus:{name}": args for name, args in drawings.items()})
     if exact:
-        for path in sorted(CORPUS.glob("*.svg")):
-            out[f"corpus-exact:{path.name}"] = [str(path.relative_to(ROOT)), "--size", "6m", "--tol", "1mm", "--exact"]
+        out.update({f"corpus-exact:{name}": args + ["--exact"] for name, args in drawings.items()})
     return out
 
 
