@@ -361,6 +361,21 @@ def test_load_leaves_the_integrator_compiled():
     assert integrator._run.signatures and integrator._evaluate_steps.signatures
 
 
+def test_load_integrates_once_a_process(monkeypatch):
+    """Every ``trace_figure`` calls the loads; after the first they do nothing (their integration took some 30 us)."""
+    from skatetrace.dynamics import integrator
+    from skatetrace.tracing import leg_motion
+
+    integrator.load()
+    leg_motion.load()
+    ran = []
+    monkeypatch.setattr(integrator, "integrate_legs", lambda *a, **kw: ran.append("integrator"))
+    monkeypatch.setattr(leg_motion, "integrate_legs", lambda *a, **kw: ran.append("leg motion"))
+    integrator.load()
+    leg_motion.load()
+    assert ran == []
+
+
 # ----------------------------------------------------------------------------------------------
 # Event location: the false position on the dense output (integrator._event_time)
 # ----------------------------------------------------------------------------------------------

@@ -13,6 +13,8 @@ formulas; other controls take those formulas.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 
@@ -55,10 +57,11 @@ def leg_motion(params: SleighParams, man: ManeuverSolution, leg, t: np.ndarray
     return y, adot, bdot
 
 
+@functools.cache
 def load() -> None:
     """Load :func:`_motion`'s machine code now, as :func:`skatetrace.dynamics.integrator.load` does the integrator's.
 
-    Numba does it on the first call; workers forked after it share the code.
+    Numba does it on the first call; workers forked after it share the code. Once a process.
     """
     sol = integrate_legs(SleighParams(), np.array([1.0, 0.0, 0.5, 0.5, 0.0]), [1.0], [np.inf], 0.0, 1e-3, rtol=1e-9,
                          atol=1e-12, dense=True).legs[0]
