@@ -361,28 +361,40 @@ def test_a_weak_ramp_is_given_up_beyond_the_arc_length_asked():
     assert (tau_capped, list(y_capped)) == (tau, list(y))
 
 
-@pytest.mark.parametrize("ends,resolved", [
-    (("far", "far"), []),                      # both weak ramps given up: no root between
-    (("far", (2.0, 1.0)), []),                 # the stronger stops beyond the length: none either
-    (("far", (0.5, 1.0)), [0, 4]),             # it stops short of it: both looked at in full
-    (("far", None), [0, 4]),                   # it does not stop (the singular point, say)
-    (((2.0, 1.0), "far"), [0, 4]),             # a weaker ramp stops, a stronger runs on: in full
-])
-def test_first_bracket_integrates_a_far_point_in_full_only_where_it_decides(ends, resolved):
+@pytest.mark.parametrize("ends,apart,side_by_side", [
+    (("far", "far"), [], []),                   # both weak ramps given up: no root between
+    (("far", (2.0, 1.0)), [], []),              # the stronger stops beyond the length: none either
+    (("far", (0.5, 1.0)), [0, 4], [0, 1]),      # it stops short of it: both looked at in full
+    (("far", None), [], []),                    # it does not stop (the singular point, say): the fine
+    ((None, "far"), [], []),                    # points between are looked at instead, either way round
+    (((2.0, 1.0), "far"), [0, 4], []),          # a weaker ramp stops beyond, a stronger runs on: in full
+])                                              # where the stop may go between them
+@pytest.mark.parametrize("coarse", [4, 1])
+def test_first_bracket_integrates_a_far_point_in_full_only_where_it_decides(ends, apart, side_by_side, coarse):
+    """A point given up far beyond the length is integrated in full only where that can tell a bracket.
+
+    Beside a point that does not stop, or next to one that stops beyond the length, it cannot: until
+    2026-11-29 it was (some 20 us each, four times in a single arc's trace). Where the stop comes or
+    goes between two points apart, the fine points are looked at without it.
+    """
     from skatetrace.tracing import maneuver
 
-    far, full = maneuver._FAR, []
-    values = {0: ends[0], 4: ends[1]}
-    in_full = {0: (3.0, 1.0), 4: ends[1] if ends[1] != far else (3.0, 1.0)}
+    far, full, looked = maneuver._FAR, [], []
+    values = {0: ends[0], coarse: ends[1]}
+    in_full = {k: v if v != far else (3.0, 1.0) for k, v in values.items()}
 
     def length_at(k, exact=False):
         if exact:
             full.append(k)
             return in_full[k]
+        looked.append(k)
         return values.get(k, (3.0, 1.0))  # the fine points between stop beyond the length
 
-    assert maneuver._first_bracket(length_at, 0, 5, 1.0, 4) is None or ends[1] == (0.5, 1.0)
-    assert sorted(set(full)) == resolved
+    found = maneuver._first_bracket(length_at, 0, coarse + 1, 1.0, coarse)
+    assert found is None or (ends[1] == (0.5, 1.0) and found == (0, coarse))
+    assert sorted(set(full)) == (apart if coarse == 4 else side_by_side)
+    if None in ends:
+        assert sorted(set(looked)) == list(range(coarse + 1))  # the fine points, where there are any
 
 
 def test_the_scan_gives_up_weak_ramps_and_finds_the_same_stop(monkeypatch):
