@@ -434,14 +434,15 @@ def _is_sign_change(g_at, root, toward, g0):
 @pytest.mark.parametrize("t_end", [20.0, -20.0])
 def test_events_are_located_to_adjacent_floats_in_few_evaluations(kappa, b, alpha, switch, stop, sing, event, t_end):
     """The integration ends at a sign change between adjacent floats, found in a third of a bisection's evaluations."""
-    from skatetrace.dynamics.integrator import _run
+    from skatetrace.dynamics.integrator import _run, _step_rows
 
     coef = np.array([[kappa, 0.0, 0.0, 0.0]])
     y0 = np.r_[glide_state(P, kappa, 0.0, b, 1.0), 0.0, b, 0.0]
     out = _run(P.M, P.m, P.I, y0, coef, np.array([switch]), alpha, 0.0, t_end, RTOL, ATOL, stop, sing, 10**6, True)
-    status, t_hit, last = out[0], out[2], out[10] - 1
+    status, t_hit, last = out[0], out[2], out[6] - 1
     assert last >= 0 and status in (0, 1, 2)
-    t_old, h, y_old, F = out[5][last], out[6][last], out[7][last].copy(), out[8][last].copy()
+    steps = _step_rows(out[5], out[6], y0.size)
+    t_old, h, y_old, F = steps[0][last], steps[1][last], steps[3][last].copy(), steps[4][last].copy()
     assert t_old < t_hit <= t_old + h if t_end > 0 else t_old + h <= t_hit < t_old
     args = (coef[0], alpha, switch, stop, sing)
     root, count, g0 = _located(*args, event, t_old, h, y_old, F)
