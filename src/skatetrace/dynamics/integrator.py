@@ -420,7 +420,7 @@ def _run(M, m, I, y0, kappas, switches, alpha, beta, t_end, rtol, atol, stop_eve
 
 
 def _step_rows(steps: np.ndarray, nsteps: int, n: int):
-    """The dense steps packed by :func:`_run`, as views: ``(t_old, h, leg, y_old, F)``, ``F`` of shape ``(nsteps, 7, n)``.
+    """The dense steps packed by :func:`_run`, as views ``(t_old, h, leg, y_old, F)``; ``F`` is ``(nsteps, 7, n)``.
 
     A row holds the step's start time, its signed size, its leg, the state at its start and the
     interpolant's coefficients, in that order.

@@ -317,9 +317,8 @@ def _first_bracket(length_at, start, stop, length, coarse):
     been seen), and so on a chain of legs whose curvature is continuous at the joins; across joins
     where the curvature jumps it does not, and there ``coarse`` is 1: every point, as the full scan.
     A point given up far beyond the length (:data:`_FAR`) is integrated in full (``length_at(i,
-    True)``) only where that can tell: beside a point that stops short of the length, or, as the
-    stronger of two points apart, beside one that stops beyond it; beside one that does not stop,
-    the fine points between are looked at instead.
+    True)``) only beside one that stops short of the length, or as the stronger of two points apart
+    beside one that stops beyond it: beside one that does not stop the fine points are looked at.
     """
     i = start
     while i < stop - 1:
@@ -328,25 +327,21 @@ def _first_bracket(length_at, start, stop, length, coarse):
         if li is _FAR or lj is _FAR:
             # A weak ramp given up far beyond the length stops there or never. Where the stronger
             # one is given up too, or stops beyond the length, there is no root between (the
-            # stopping length falls as the ramp strengthens, as above); any other pair is looked
-            # at as integrated in full.
+            # stopping length falls as the ramp strengthens, as above); the other pairs are looked
+            # at below, integrated in full only where that can tell a bracket.
             if li is _FAR and (lj is _FAR or (lj is not None and lj[0] > length)):
                 i = j
                 continue
-            if not any(v is not None and v is not _FAR and v[0] <= length for v in (li, lj)):
-                # Neither stops short of the length, and the far one stops beyond it or never: no
-                # bracket between the two. In full it would only tell whether the stop comes or
-                # goes between them; that matters where there are fine points between, and beside
-                # a ramp that does not stop they are looked at instead.
-                if j - i == 1:
-                    i = j
-                    continue
-                if li is None or lj is None:
-                    fine = _first_bracket(length_at, i, j + 1, length, 1)
-                    if fine is not None:
-                        return fine
-                    i = j
-                    continue
+            short = any(v is not None and v is not _FAR and v[0] <= length for v in (li, lj))
+            if not short and (j - i == 1 or li is None or lj is None):
+                # No bracket between the two (the far one stops beyond the length, or never). In full
+                # it would tell whether the stop comes or goes between them: the fine points between
+                # tell that too where one does not stop, and are looked at instead.
+                fine = _first_bracket(length_at, i, j + 1, length, 1) if j - i > 1 else None
+                if fine is not None:
+                    return fine
+                i = j
+                continue
             li, lj = length_at(i, True), length_at(j, True)
         if li is not None and lj is not None:
             if (li[0] - length) * (lj[0] - length) <= 0.0:
