@@ -76,8 +76,9 @@ def test_auto_splits_failing_sections_and_those_before_them(monkeypatch):
     assert [len(s.pieces) for s in res.figure.curves[0].sections()] == [1, 1, 1, 1]
     never = trace_and_verify(fig, rests="never")
     assert not never.success and never.rests == () and never.rounds == 1
+    # With no round of rests in the middle, the last resort rests at every join of the failing section.
     capped = trace_and_verify(fig, rests="auto", max_rounds=0)
-    assert not capped.success and capped.rounds == 1
+    assert capped.success and capped.rounds == 2 and sorted(capped.rests) == [(0, 1), (0, 2), (0, 3)]
 
 
 def test_bad_policy_is_refused():
@@ -221,10 +222,12 @@ def test_auto_stops_adding_rests_when_two_rounds_in_a_row_verify_no_more_of_the_
 
     monkeypatch.setattr(rests_module, "verify", verifier(lambda sec: False))
     res = trace_and_verify(fig, rests="auto")
-    # rounds 2 and 3 (2 and 4 sections) verified nothing more than round 1; the fourth would have
-    # traced 8 sections of a piece each
-    assert not res.success and res.rounds == 3 and len(res.trace.sections) == 4
-    assert "stopped adding rests after 3 rounds" in res.message and res.note
+    # rounds 2 and 3 (2 and 4 sections) verified nothing more than round 1; the last resort, a rest
+    # at every join of the failing sections (8 sections of a piece each), verified no more, and the
+    # third round's result is kept, the round counted
+    assert not res.success and res.rounds == 4 and len(res.trace.sections) == 4
+    assert "stopped adding rests in the middle of failing sections after 3 rounds" in res.message
+    assert "a rest at each of the 4 smooth joins of the sections left failing verified no more" in res.message
     # a round that verifies more keeps the loop going: the last quarter verifies in round 3, and
     # round 4 splits the sections before it into single pieces
     monkeypatch.setattr(rests_module, "verify", verifier(lambda sec: [p.index for p in sec.pieces] in ([6, 7], [7])))
@@ -352,4 +355,22 @@ def test_a_round_that_leaves_a_long_section_failed_is_not_counted_against_the_re
     assert res.success and not res.note and res.rounds >= 4
     assert max(len(s.section.pieces) for s in res.trace.sections) < LONG_SECTION
     capped = trace_and_verify(fig, rests="auto", max_rounds=2)  # the rounds still end at max_rounds
-    assert not capped.success and capped.rounds == 4  # three rounds, then the search in full
+    # three rounds, the search in full, then the last resort: a rest at every join of what still fails
+    assert capped.success and capped.rounds == 5
+    assert max(len(s.section.pieces) for s in capped.trace.sections) == 1 < len(capped.trace.sections)
+
+
+def test_sections_still_failing_when_the_rounds_end_are_rested_at_every_join():
+    """Three arcs of a few millimetres from a random drawing of Béziers at 6 m (radius 1.5 mm, then 6.7 mm,
+    then a line) are one section that no launch, glide and stop traces. Rests in the middle of
+    failing sections found that in ten rounds of the whole drawing, and gave up with it failed
+    (27 s); with no round here (``max_rounds=0``) the last resort rests at both joins, and each arc
+    is traced and verified on its own. Before 2026-11-29 the figure was left failed."""
+    pieces = (Segment(-657.7214395732998, 0.0026560329736021616), Segment(150.37451415725394, 0.0023430528604097465),
+              Segment(0.0, 0.004692937739051344))
+    fig = Figure("tiny-arcs", (Curve(pieces, (SMOOTH, SMOOTH), name="tiny"),), skater_params(height=1.7))
+    options = TraceOptions(speed=2.0)
+    assert not trace_and_verify(fig, options=options, rests="never").success
+    res = trace_and_verify(fig, options=options, rests="auto", max_rounds=0)
+    assert res.success and res.rounds == 2 and sorted(res.rests) == [(0, 1), (0, 2)]
+    assert [len(s.section.pieces) for s in res.trace.sections] == [1, 1, 1]

@@ -170,6 +170,41 @@ def _searched_in_full(result: VerifiedTrace, params, rel_tol: float, cache: dict
     return replace(result, trace=trace, schedule=schedule, states=states, report=report, rounds=result.rounds + 1)
 
 
+def _verified_length(result: VerifiedTrace) -> float:
+    """How much of the traced figure ``result`` traced and verified (the sum of those sections' lengths)."""
+    return sum(sec.section.length for sec, checks in zip(result.trace.sections, result.report.sections)
+               if sec.success and checks.get("passed", False))
+
+
+def _rested_throughout(result: VerifiedTrace, figure: Figure, params, options: TraceOptions, rel_tol: float,
+                       cache: dict, progress) -> VerifiedTrace:
+    """``result`` traced and verified once more with a rest at every smooth join of the sections it leaves failing.
+
+    The last resort of ``rests="auto"``, once its rests in the middle of failing sections have run
+    out of rounds or stopped helping: those sections (and, where a replay strayed, the sections
+    before them on its curve, :func:`_to_split`) are cut into their pieces, which a single
+    manoeuvre each traces. Kept where that verifies more of the figure than ``result``. A random
+    path of two cubic Béziers, a quadratic and two lines left seven millimetre-long arcs of radius
+    down to 1.4 mm failed after ten rounds (19 s); rested at every join, they traced and verified.
+    """
+    passed = [sec.success and checks.get("passed", False)
+              for sec, checks in zip(result.trace.sections, result.report.sections)]
+    new = [(sec.curve_index, piece.index) for sec in _to_split(result.trace.sections, passed)
+           for piece in sec.section.pieces[1:]]
+    if not new:
+        return result
+    rests = tuple(result.rests) + tuple(new)
+    current = add_rests(figure, rests)
+    trace = trace_figure(current, params, options, progress=progress, cache=cache)
+    schedule, states, report = _sampled_and_verified(trace, rel_tol)
+    again = VerifiedTrace(figure=current, trace=trace, schedule=schedule, states=states, report=report, rests=rests,
+                          rounds=result.rounds + 1)
+    if again.success or _verified_length(again) > _verified_length(result):
+        return again
+    return replace(result, rounds=again.rounds,
+                   note=f"a rest at each of the {len(new)} smooth joins of the sections left failing verified no more")
+
+
 def trace_and_verify(figure: Figure, params: SleighParams | None = None, options: TraceOptions = TraceOptions(),
                      *, rests: str = "auto", rel_tol: float = 1e-6, max_rounds: int = 8,
                      limits: HumanLimits | None = None, progress=None) -> VerifiedTrace:
@@ -185,7 +220,8 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         more than :data:`~skatetrace.tracing.options.LONG_SECTION` pieces failed is not counted, since
         splitting is what traces such a section). The sections are traced with
         :attr:`~skatetrace.tracing.options.TraceOptions.split_on_failure`, and where the last round
-        leaves a section of several pieces failed, it is searched in full once more;
+        leaves a section of several pieces failed, it is searched in full once more, and where
+        sections still fail, rested at every smooth join (:func:`_rested_throughout`);
         ``"never"`` traces the figure as given; ``"joins"`` rests at every smooth join.
     rel_tol : float
         Verification tolerance as a fraction of the figure's size (:func:`~skatetrace.verification.verify.verify`).
@@ -215,6 +251,14 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     splitting = replace(options, split_on_failure=True) if rests == "auto" and options.reach is None else options
     rounds = 0
     verified: list[float] = []  # per round, the length of the figure traced and verified
+
+    def last_resort(result: VerifiedTrace) -> VerifiedTrace:
+        """Where the rounds have run out: sections left failing searched in full, then cut at every join."""
+        result = _searched_in_full(result, params, rel_tol, cache, progress)
+        if result.success:
+            return result
+        return _rested_throughout(result, figure, params, splitting, rel_tol, cache, progress)
+
     while True:
         rounds += 1
         if options.reach is None:
@@ -225,8 +269,10 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         result = VerifiedTrace(figure=current, trace=trace, schedule=schedule, states=states, report=report,
                                rests=tuple(added), rounds=rounds)
         # a planned figure is planned once: a rest changes the program, and the plan says why it failed
-        if result.success or rests != "auto" or rounds > max_rounds or options.reach is not None:
+        if result.success or rests != "auto" or options.reach is not None:
             return _finish(_searched_in_full(result, params, rel_tol, cache, progress), limits)
+        if rounds > max_rounds:
+            return _finish(last_resort(result), limits)
         passed = [sec.success and checks.get("passed", False) for sec, checks in zip(trace.sections, report.sections)]
         # A section of more pieces than LONG_SECTION that failed was given up soon, and is split
         # (splitting is what traces a long wiggle: one of 80 arcs failed as 1, 2 and 4 sections,
@@ -237,9 +283,11 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
         if len(verified) > _BARREN_ROUNDS and verified[-1] <= max(verified[:-_BARREN_ROUNDS]):
             # splitting has stopped helping: each round doubles the sections to trace (a zigzag
             # read as one smooth curve took 10, 16, then 42 s a round, none of its pieces traced)
-            return _finish(replace(_searched_in_full(result, params, rel_tol, cache, progress), note=(
-                f"stopped adding rests after {rounds} rounds: the last {_BARREN_ROUNDS} traced and verified no more "
-                f"of the figure than the round before them")), limits)
+            last = last_resort(result)
+            return _finish(replace(last, note=(
+                f"stopped adding rests in the middle of failing sections after {rounds} rounds: the last "
+                f"{_BARREN_ROUNDS} traced and verified no more of the figure than the round before them"
+                + (f"; {last.note}" if last.note else ""))), limits)
         new = [(sec.curve_index, piece) for sec in _to_split(trace.sections, passed)
                if (piece := middle_join(sec.section)) is not None]
         if not new:
