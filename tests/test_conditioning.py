@@ -234,7 +234,7 @@ def test_the_phosphor_spiral_end_speed_is_round_off_in_the_closed_loop_too():
 
     path = Path(__file__).parent / "data" / "svg-corpus" / "phosphor-spiral.svg"
     figure = st.resolve(path, size="6m", tol="1mm", height=1.7).figure
-    once = st.trace_and_verify(figure, figure.params, st.TraceOptions(speed=2.0), max_rounds=0)
+    once = st.trace_and_verify(figure, figure.params, st.TraceOptions(speed=2.0), rests="never")
     sec = once.report.sections[0]
     assert sec["instrument"] == "closed loop"
     spread = sec["closed_loop_conditioning"]
