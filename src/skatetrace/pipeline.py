@@ -170,10 +170,15 @@ def _searched_in_full(result: VerifiedTrace, params, rel_tol: float, cache: dict
     return replace(result, trace=trace, schedule=schedule, states=states, report=report, rounds=result.rounds + 1)
 
 
+def _passed(result: VerifiedTrace) -> list[bool]:
+    """Whether each section of ``result`` was traced and its replay passed."""
+    return [sec.success and checks.get("passed", False)
+            for sec, checks in zip(result.trace.sections, result.report.sections)]
+
+
 def _verified_length(result: VerifiedTrace) -> float:
     """How much of the traced figure ``result`` traced and verified (the sum of those sections' lengths)."""
-    return sum(sec.section.length for sec, checks in zip(result.trace.sections, result.report.sections)
-               if sec.success and checks.get("passed", False))
+    return sum(sec.section.length for sec, ok in zip(result.trace.sections, _passed(result)) if ok)
 
 
 def _rested_throughout(result: VerifiedTrace, figure: Figure, params, options: TraceOptions, rel_tol: float,
@@ -187,9 +192,7 @@ def _rested_throughout(result: VerifiedTrace, figure: Figure, params, options: T
     path of two cubic Béziers, a quadratic and two lines left seven millimetre-long arcs of radius
     down to 1.4 mm failed after ten rounds (19 s); rested at every join, they traced and verified.
     """
-    passed = [sec.success and checks.get("passed", False)
-              for sec, checks in zip(result.trace.sections, result.report.sections)]
-    new = [(sec.curve_index, piece.index) for sec in _to_split(result.trace.sections, passed)
+    new = [(sec.curve_index, piece.index) for sec in _to_split(result.trace.sections, _passed(result))
            for piece in sec.section.pieces[1:]]
     if not new:
         return result
@@ -273,13 +276,13 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
             return _finish(_searched_in_full(result, params, rel_tol, cache, progress), limits)
         if rounds > max_rounds:
             return _finish(last_resort(result), limits)
-        passed = [sec.success and checks.get("passed", False) for sec, checks in zip(trace.sections, report.sections)]
+        passed = _passed(result)
         # A section of more pieces than LONG_SECTION that failed was given up soon, and is split
         # (splitting is what traces a long wiggle: one of 80 arcs failed as 1, 2 and 4 sections,
         # and verified as 8): a round that leaves one is not counted against the rests.
         long_failed = any(not ok and len(sec.section.pieces) > LONG_SECTION for sec, ok in zip(trace.sections, passed))
         if not (splitting.split_on_failure and long_failed):
-            verified.append(sum(sec.section.length for sec, ok in zip(trace.sections, passed) if ok))
+            verified.append(_verified_length(result))
         if len(verified) > _BARREN_ROUNDS and verified[-1] <= max(verified[:-_BARREN_ROUNDS]):
             # splitting has stopped helping: each round doubles the sections to trace (a zigzag
             # read as one smooth curve took 10, 16, then 42 s a round, none of its pieces traced)
