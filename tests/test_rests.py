@@ -362,10 +362,12 @@ def test_a_round_that_leaves_a_long_section_failed_is_not_counted_against_the_re
 
 def test_sections_still_failing_when_the_rounds_end_are_rested_at_every_join():
     """Three arcs of a few millimetres from a random drawing of Béziers at 6 m (radius 1.5 mm, then 6.7 mm,
-    then a line) are one section that no launch, glide and stop traces. Rests in the middle of
-    failing sections found that in ten rounds of the whole drawing, and gave up with it failed
-    (27 s); with no round here (``max_rounds=0``) the last resort rests at both joins, and each arc
-    is traced and verified on its own. Before 2026-11-29 the figure was left failed."""
+    then a line). In that drawing their section, with four more pieces, had no stop; halving it in
+    the middle found nothing in ten rounds (19 s) and left the drawing failed. Alone, the three are
+    traced as one section, but its replay strays 1.3e-8 from them, beyond 1e-6 of their 8.7 mm
+    (the same 1.3e-8 with the curvatures moved by 1e-9 or 1e-6 of themselves: not round-off). With
+    no round of rests (``max_rounds=0``) the last resort rests at both joins, and each arc is traced
+    and verified on its own. Before 2026-11-29 the figure was left failed."""
     pieces = (Segment(-657.7214395732998, 0.0026560329736021616), Segment(150.37451415725394, 0.0023430528604097465),
               Segment(0.0, 0.004692937739051344))
     fig = Figure("tiny-arcs", (Curve(pieces, (SMOOTH, SMOOTH), name="tiny"),), skater_params(height=1.7))
