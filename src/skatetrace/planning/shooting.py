@@ -32,12 +32,15 @@ from ..dynamics.integrator import _run as _integrate
 
 __all__ = ["legs_from", "segment_end", "segment_ends", "jacobian_columns"]
 
-#: Relative step of the forward differences (at least this absolute step). The residual is strongly
-#: curved: at 1e-7 the differences' truncation error stalled the Gauss-Newton iterations of 12 of the 14
+#: Relative step of the forward differences (at least this absolute step). At 1e-7 the differences
+#: were too far from the residual's derivative: they stalled the Gauss-Newton iterations of 12 of the 14
 #: finishes of the circle eight at 1.85 m between 1e-8 and 5e-10 after 30 iterations, steps of 1e-6
 #: and 1e-5 stalled them higher, and at 1e-9 all 14 finished within 2 to 5 iterations. Over 135
 #: figures (school figures at 1.55 to 1.9 m, the examples, the corpus at 6 m) the finishes that
 #: failed went from 113 of 473 to 36 of 402 (fewer failures, fewer meshes refined and programs again).
+#: Central differences did worse at every step from 1e-9 to 1e-5 on octicons-git-branch-16's stalled
+#: finishes, so the residual is not smooth on those scales (the integrations' steps and joins move
+#: with the unknowns); a one-sided step this small sees the derivative where the iteration is.
 DIFF_STEP = 1e-9
 #: Binomial coefficients ``C(j, k)`` of the cubic's re-expansion, row ``j``.
 _BINOMIAL = np.array([[1.0, 0.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], [1.0, 2.0, 1.0, 0.0], [1.0, 3.0, 3.0, 1.0]])
