@@ -168,7 +168,7 @@ def test_failures_come_back_as_none(section):
 
 def test_the_circle_eight_of_a_1_85_m_skater_finishes_every_section_from_its_first_plan(monkeypatch, tmp_path):
     """The forward differences' step: at 1e-7 12 of this figure's 14 finishes stalled between 1e-8 and 5e-10
-    after 30 iterations (each then cost a refined mesh and a program again); at 1e-9 its two finish at once."""
+    after 30 iterations (each then cost a refined mesh and a program again); at 1e-9 its first plan's finish."""
     from skatetrace.cli.entry import script
 
     finished = []

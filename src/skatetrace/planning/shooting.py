@@ -39,8 +39,8 @@ __all__ = ["legs_from", "segment_end", "segment_ends", "jacobian_columns"]
 #: figures (school figures at 1.55 to 1.9 m, the examples, the corpus at 6 m) the finishes that
 #: failed went from 113 of 473 to 36 of 402 (fewer failures, fewer meshes refined and programs again).
 #: Central differences did worse at every step from 1e-9 to 1e-5 on octicons-git-branch-16's stalled
-#: finishes, so the residual is not smooth on those scales (the integrations' steps and joins move
-#: with the unknowns); a one-sided step this small sees the derivative where the iteration is.
+#: finishes, so the residual is not smooth on those scales (likely as the integrations' steps and the
+#: joins' crossings move with the unknowns); a one-sided step this small sees the slope where the iterate is.
 DIFF_STEP = 1e-9
 #: Binomial coefficients ``C(j, k)`` of the cubic's re-expansion, row ``j``.
 _BINOMIAL = np.array([[1.0, 0.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], [1.0, 2.0, 1.0, 0.0], [1.0, 3.0, 3.0, 1.0]])
