@@ -90,7 +90,7 @@ def test_the_compiled_jacobian_columns_are_forward_differences_of_the_segments(s
     params, ends, coeffs, times, U, states, kw = section
     N, stride = 12, 4  # the section's first twelve intervals, three segments
     times, U = times[:N + 1].copy(), U[:N + 1].copy()
-    bounds = np.array([0, 4, 8, 12], dtype=np.int64)
+    bounds = np.arange(0, N + 1, stride, dtype=np.int64)  # [0, 4, 8, 12]
     tot = params.M + params.m
     yscale = np.array([tot, tot, 1.0, 1.0, ends[-1]])
     ys = np.ascontiguousarray(states[:, bounds[:-1]].T)
