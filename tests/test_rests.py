@@ -57,6 +57,57 @@ def test_middle_join_is_nearest_half_the_length():
     assert middle_join(single) is None
 
 
+def test_a_section_that_fails_again_is_also_split_by_count_of_pieces():
+    # four long pieces, then twelve short ones (a tight loop drawn as many small arcs)
+    segs = (Segment(0.1, 4.0),) * 4 + tuple(Segment(5.0 * (-1) ** k, 0.05) for k in range(12))
+    sec = Curve(segs, (SMOOTH,) * 15).sections()[0]
+    assert middle_join(sec) == 2  # half of 16.6 is nearest the join after 8
+    assert rests_module._split_joins(sec, again=False) == [2]
+    assert rests_module._split_joins(sec, again=True) == [2, 8]
+    # where the two middles are a quarter of the pieces apart or nearer, only the one by length
+    even = _s_curve().sections()[0]
+    assert rests_module._split_joins(even, again=True) == [middle_join(even)] == [2]
+    single = Curve((Segment(1.0, 1.0),)).sections()[0]
+    assert rests_module._split_joins(single, again=True) == []
+
+
+def _untraceable_stretch(monkeypatch, hard: int):
+    """A stand-in tracer: a section of several pieces that holds piece ``hard`` is not traced, every
+    other section is, and every traced one verifies."""
+    def fake_trace(figure, params, options, **kw):
+        sections = [SimpleNamespace(curve_index=ci, section=s, success=len(s.pieces) == 1
+                                    or all(p.index != hard for p in s.pieces), message="no stop")
+                    for ci, c in enumerate(figure.curves) for s in c.sections()]
+        return SimpleNamespace(sections=sections, success=all(s.success for s in sections), options=options,
+                               message="no stop")
+
+    def fake_sampled(trace, rel_tol):
+        report = SimpleNamespace(success=True, message="ok", sections=[{"passed": True} for _ in trace.sections])
+        return None, {}, report
+
+    monkeypatch.setattr(rests_module, "trace_figure", fake_trace)
+    monkeypatch.setattr(rests_module, "_sampled_and_verified", fake_sampled)
+    monkeypatch.setattr(rests_module, "_finish", lambda result, limits: result)
+
+
+def test_a_stretch_that_fails_to_trace_is_cut_into_rather_than_peeled(monkeypatch):
+    # Four long pieces and twelve short ones of unlike lengths (no ties of the middle), the tenth
+    # piece untraceable in any section of several: halved by length alone, the short stretch is
+    # only peeled of its neighbours, a round each. Where a part fails again it is also halved by count.
+    segs = (Segment(0.1, 4.0),) * 4 + tuple(Segment(5.0 * (-1) ** k, 0.05 + 0.003 * k) for k in range(12))
+    fig = Figure("loop", (Curve(segs, (SMOOTH,) * 15),))
+    _untraceable_stretch(monkeypatch, hard=9)
+    res = trace_and_verify(fig, rests="auto")
+    # the first time a section fails it is halved by length only, as a replay that strays needs
+    assert res.success and res.rests[0] == (0, middle_join(fig.curves[0].sections()[0])) == (0, 2)
+    assert (0, 9) in res.rests  # the untraceable piece ends alone (piece 9 starts a section) ...
+    by_length = rests_module._split_joins
+    monkeypatch.setattr(rests_module, "_split_joins", lambda section, again: by_length(section, False))
+    peeled = trace_and_verify(fig, rests="auto")
+    assert peeled.success
+    assert res.rounds <= peeled.rounds - 2 and len(res.rests) <= len(peeled.rests)  # ... sooner, with no more rests
+
+
 def test_auto_splits_failing_sections_and_those_before_them(monkeypatch):
     # A stand-in verification that fails every section of more than one piece: the loop must halve
     # sections (and the ones before a failing one) until each is a single piece, then pass.

@@ -17,8 +17,9 @@ same) splits the section in two, each with shorter manoeuvres.
 section fails (not traced, replay too far from the figure, or not at rest at its ends) adds a
 rest at the smooth join nearest the middle of it, and where its replay strayed, of every section
 before it on its curve (the replay carries errors from one section into the next), then traces
-and verifies again, until everything passes or no such section has a smooth join left. Since a
-failing section is split, the tracer gives up a long one sooner
+and verifies again, until everything passes or no such section has a smooth join left. A part of
+a section that failed to trace which fails to trace again is also rested at its middle by count of
+pieces. Since a failing section is split, the tracer gives up a long one sooner
 (:attr:`~skatetrace.tracing.options.TraceOptions.split_on_failure`); where the rounds end with
 such a section failed, it is searched in full once more. ``rests="never"`` traces the figure as
 given, ``rests="joins"`` rests at every smooth join.
@@ -115,6 +116,45 @@ def middle_join(section: Section) -> int | None:
         if best is None or abs(acc - half) < best[0]:
             best = (abs(acc - half), after.index)
     return best[1]
+
+
+#: Where a section that failed to trace lies within one that failed to trace the round before,
+#: ``rests="auto"`` splits it at its middle join by count of pieces too, where that is more than
+#: this share of its pieces away from its middle by length (:func:`_split_joins`).
+_COUNT_SPLIT = 0.25
+
+
+def _split_joins(section: Section, again: bool) -> list[int]:
+    """Pieces after which ``rests="auto"`` rests a failing ``section``: the middle by length, ``again`` by count too.
+
+    The join nearest the middle by arc length (:func:`middle_join`) halves the manoeuvres, which is
+    what a replay that strayed needs, and is all a section gets the first time it fails. ``again``
+    says that the section was not traced and lies within one that was not traced the round before:
+    halving its length did not help, and the failure is likely some stretch of it, such as a tight
+    loop drawn as many short pieces. Split by length alone, such a stretch is only peeled of its long
+    neighbours, a round each; so such a section is also rested at its middle join by count of pieces,
+    where that is more than :data:`_COUNT_SPLIT` of its pieces away, which cuts into the stretch.
+    Empty for a single piece.
+    """
+    middle = middle_join(section)
+    if middle is None:
+        return []
+    pieces = section.pieces
+    by_count = pieces[len(pieces) // 2].index
+    if again and abs(by_count - middle) > _COUNT_SPLIT * len(pieces):
+        return [middle, by_count]
+    return [middle]
+
+
+def _span(sec) -> tuple[int, int, int]:
+    """A traced section's curve and the indices of its first and last pieces."""
+    return sec.curve_index, sec.section.pieces[0].index, sec.section.pieces[-1].index
+
+
+def _within(sec, spans) -> bool:
+    """Whether the section ``sec`` lies within one of the ``spans`` (:func:`_span`)."""
+    curve, first, last = _span(sec)
+    return any(c == curve and lo <= first and last <= hi for c, lo, hi in spans)
 
 
 def add_rests(figure: Figure, where: Iterable[tuple[int, int]]) -> Figure:
@@ -217,7 +257,9 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     ----------
     rests : {"auto", "never", "joins"}
         ``"auto"`` (default) adds a rest in the middle of each failing section (and where its
-        replay strayed, of the sections before it on its curve), and tries again, at most
+        replay strayed, of the sections before it on its curve; where a section that failed to
+        trace lies within one that failed to trace the round before, at its middle by count of
+        pieces too), and tries again, at most
         ``max_rounds`` times, and no more once two rounds in a row have verified no more of the
         figure than before them (the result's ``note`` says so; a round that leaves a section of
         more than :data:`~skatetrace.tracing.options.LONG_SECTION` pieces failed is not counted, since
@@ -254,6 +296,7 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
     splitting = replace(options, split_on_failure=True) if rests == "auto" and options.reach is None else options
     rounds = 0
     verified: list[float] = []  # per round, the length of the figure traced and verified
+    untraced: list[tuple[int, int, int]] = []  # the sections split last round that were not traced
 
     def last_resort(result: VerifiedTrace) -> VerifiedTrace:
         """Where the rounds have run out: sections left failing searched in full, then cut at every join."""
@@ -291,8 +334,10 @@ def trace_and_verify(figure: Figure, params: SleighParams | None = None, options
                 f"stopped adding rests in the middle of failing sections after {rounds} rounds: the last "
                 f"{_BARREN_ROUNDS} traced and verified no more of the figure than the round before them"
                 + (f"; {last.note}" if last.note else ""))), limits)
-        new = [(sec.curve_index, piece) for sec in _to_split(trace.sections, passed)
-               if (piece := middle_join(sec.section)) is not None]
+        split = _to_split(trace.sections, passed)
+        new = [(sec.curve_index, piece) for sec in split
+               for piece in _split_joins(sec.section, not sec.success and _within(sec, untraced))]
+        untraced = [_span(sec) for sec in split if not sec.success]
         if not new:
             return _finish(result, limits)
         added += new
