@@ -61,7 +61,7 @@ def test_a_section_that_fails_again_is_also_split_by_count_of_pieces():
     # four long pieces, then twelve short ones (a tight loop drawn as many small arcs)
     segs = (Segment(0.1, 4.0),) * 4 + tuple(Segment(5.0 * (-1) ** k, 0.05) for k in range(12))
     sec = Curve(segs, (SMOOTH,) * 15).sections()[0]
-    assert middle_join(sec) == 2  # half of 16.6 is nearest the join after 8
+    assert middle_join(sec) == 2  # half of the length, 8.3, is nearest the join at 8 (before piece 2)
     assert rests_module._split_joins(sec, again=False) == [2]
     assert rests_module._split_joins(sec, again=True) == [2, 8]
     # where the two middles are a quarter of the pieces apart or nearer, only the one by length
@@ -100,7 +100,7 @@ def test_a_stretch_that_fails_to_trace_is_cut_into_rather_than_peeled(monkeypatc
     res = trace_and_verify(fig, rests="auto")
     # the first time a section fails it is halved by length only, as a replay that strays needs
     assert res.success and res.rests[0] == (0, middle_join(fig.curves[0].sections()[0])) == (0, 2)
-    assert (0, 9) in res.rests  # the untraceable piece ends alone (piece 9 starts a section) ...
+    assert {(0, 9), (0, 10)} <= set(res.rests)  # the untraceable piece ends alone ...
     by_length = rests_module._split_joins
     monkeypatch.setattr(rests_module, "_split_joins", lambda section, again: by_length(section, False))
     peeled = trace_and_verify(fig, rests="auto")
