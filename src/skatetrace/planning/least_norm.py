@@ -66,7 +66,7 @@ def _augmented(J: np.ndarray, r: np.ndarray) -> np.ndarray | None:
     norms = np.linalg.norm(J, axis=1)
     if not np.all(norms > 0.0):
         return None
-    rows, cols = J.shape
+    cols = J.shape[1]
     scaled = scipy.sparse.csc_matrix(J / norms[:, None])
     K = scipy.sparse.bmat([[scipy.sparse.identity(cols, format="csc") * _GAMMA, scaled.T], [scaled, None]],
                           format="csc")
