@@ -25,8 +25,12 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
+from .numba_cache import guard_saves
+
 __all__ = ["N_STAGES", "A", "B", "C", "A_EXTRA", "C_EXTRA", "POWER", "REACHED", "EXHAUSTED", "SMALL_STEP",
            "NONFINITE", "combine", "integrate", "register", "rhs"]
+
+guard_saves()  # this module's compiled functions share numba's cache with other processes
 
 #: How :func:`integrate` ended: at the end of the stretch, or not (budget, step size, non-finite state).
 REACHED, EXHAUSTED, SMALL_STEP, NONFINITE = 0, -1, -2, -3

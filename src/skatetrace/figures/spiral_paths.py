@@ -21,7 +21,11 @@ import math
 import numpy as np
 from numba import njit
 
+from ..dynamics.numba_cache import guard_saves
+
 __all__ = ["cell_nodes", "foot_points", "positions"]
+
+guard_saves()  # this module's compiled functions share numba's cache with other processes
 
 # The quadrature rule, frozen into the compiled code as constants.
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(10)

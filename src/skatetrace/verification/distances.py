@@ -19,12 +19,15 @@ from scipy.spatial import cKDTree
 
 from ..dynamics.controls import distinct_steps
 from ..dynamics.model import SleighParams, velocities
+from ..dynamics.numba_cache import guard_saves
 from ..figures.geometry import distance_to_segment
 
 if TYPE_CHECKING:  # pragma: no cover - for the annotations only (verify imports this module)
     from .verify import Replay
 
 __all__ = ["figure_to_replay", "nearer_pieces"]
+
+guard_saves()  # this module's compiled functions share numba's cache with other processes
 
 
 @njit(cache=True)
