@@ -19,7 +19,9 @@ Run: python bench/bench_double_flower.py [N] [--cold K] [--first K] [--figure NA
   TMP`` (plots and viewer included), each with an empty numba cache of its own (``NUMBA_CACHE_DIR``
   set to a new folder: numba then neither reads nor writes the caches beside the sources), so each
   compiles what a first run after a fresh install compiles; median wall time, and the parts the CLI
-  said it compiled. ``--first 0`` (the default) skips this part.
+  said it compiled; each run's job for later runs (``skatetrace.cli.compiled.compile_later``) is waited
+  for before the next run, and how long after the run it ended is reported. ``--first 0`` (the
+  default) skips this part.
 - engines: the replay once more with ``verify.replay(..., engine="scipy")`` (solve_ivp with a Python
   right-hand side, the pre-compilation path) beside the median compiled replay, in this process:
   their ratio is the compiled replay's speed-up (``--no-engines`` skips it).
@@ -29,6 +31,7 @@ Run: python bench/bench_double_flower.py [N] [--cold K] [--first K] [--figure NA
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import subprocess
 import sys
@@ -102,12 +105,41 @@ def cold_runs(name: str, k: int) -> dict:
             "byte_compiled": bool(compiled)}
 
 
+def _later_job_end(cache: Path, timeout: float = 300.0) -> float | None:
+    """Seconds until the run's job for later runs (``skatetrace.cli.compiled.compile_later``) ends, or None (no job)."""
+    import fcntl
+
+    from skatetrace.cli.compiled import LATER_LOCK
+
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < timeout:
+        locks = list(cache.rglob(LATER_LOCK))
+        if not locks:
+            return None
+        with open(locks[0], "a+b") as fh:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                return time.perf_counter() - t0
+            except OSError:
+                time.sleep(0.2)
+    return math.inf
+
+
+def _seconds(values) -> str:
+    return ", ".join("none" if v is None else f"{v:.1f} s" for v in values)
+
+
 def first_runs(name: str, k: int) -> dict:
-    """The README's main job with an empty numba cache, ``k`` times (a first run after a fresh install)."""
+    """The README's main job with an empty numba cache, ``k`` times (a first run after a fresh install).
+
+    Each run's job for later runs (the parts it does not need, compiled in the background) is waited
+    for before the next run, as a user's next command would find it: ``later`` is how long after the
+    run it ended (None where no job was started).
+    """
     import os
 
     cmd = cli_command()
-    walls, codes, compiled = [], [], []
+    walls, codes, compiled, later = [], [], [], []
     for _ in range(k):
         with tempfile.TemporaryDirectory(prefix="skatetrace-first-") as tmp:
             env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba")}
@@ -115,11 +147,12 @@ def first_runs(name: str, k: int) -> dict:
             proc = subprocess.run(cmd + ["trace", name, "--out", str(Path(tmp) / "out")], capture_output=True,
                                   text=True, env=env)
             walls.append(time.perf_counter() - t0)
+            later.append(_later_job_end(Path(tmp) / "numba"))
         codes.append(proc.returncode)
         compiled.append(re.findall(r"compiled (.+?) in ([0-9]+) s", proc.stderr))
     return {"command": cmd + ["trace", name, "--out", "TMP"], "runs": k, "wall": walls, "wall_median": median(walls),
             "returncodes": codes, "success": all(c == 0 for c in codes), "compiled": compiled[-1],
-            "ahead": k > 0 and "alongside" in proc.stderr}
+            "ahead": k > 0 and "alongside" in proc.stderr, "later": later}
 
 
 def main(argv=None) -> dict:
@@ -174,7 +207,8 @@ def main(argv=None) -> dict:
         parts = ", ".join(f"{part} {sec} s" for part, sec in first["compiled"]) or "nothing"
         print(f"first run with an empty numba cache ({' '.join(first['command'][1:])}), median of {args.first}: "
               f"{first['wall_median']:.2f} s wall; compiled in the run: {parts}"
-              f"{'; the verification compiled alongside' if first['ahead'] else ''}; exit codes {first['returncodes']}")
+              f"{'; the verification compiled alongside' if first['ahead'] else ''}; exit codes {first['returncodes']}; "
+              f"the job for later runs ended {_seconds(first['later'])} after each run")
     return out
 
 

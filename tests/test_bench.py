@@ -149,6 +149,8 @@ def test_run_all_smoke(tmp_path, capsys):
     assert res["double_flower"]["cold"]["success"]
     first = res["double_flower"]["first"]  # a real first run: the integrator compiled in it
     assert first["success"] and any(part == "the manoeuvre integrator" for part, _ in first["compiled"])
+    # and its job for later runs compiled the rest, waited for before the cache was removed
+    assert first["later"] and all(v is not None and v < float("inf") for v in first["later"])
     # every table row has as many cells as its header (a '|' inside a cell would break it)
     lines = text.splitlines()
     for i, line in enumerate(lines):

@@ -1,8 +1,10 @@
 """The compiled core's cache: cold and warm as numba sees it (skatetrace.cli.compiled)."""
 
+import fcntl
 import os
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -39,12 +41,33 @@ def test_a_fresh_cache_is_cold_then_warm_in_the_next_process(tmp_path):
     assert again.stdout.split("\n")[:2] == ["True", "0 None"]
 
 
+def _job_done(cache, timeout: float = 600.0) -> bool:
+    """Wait for the job of ``compiled.compile_later`` that holds its lock in ``cache`` (numba's) to end."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        locks = list(cache.rglob(compiled.LATER_LOCK))
+        if not locks:
+            return False  # no job was started
+        with open(locks[0], "a+b") as fh:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                return True
+            except OSError:
+                pass
+        time.sleep(0.5)
+    return False
+
+
 @pytest.mark.slow
 def test_a_first_run_compiles_only_what_it_needs_and_says_so(tmp_path):
     """A launch-glide-stop trace compiles the integrator, the replay and the distance checks, named
     as they compile, and neither the closed-loop replay nor the planner's finish (half the time of
-    compiling everything); the next run compiles nothing and says nothing of it."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    compiling everything): those compile in a job of their own, for later runs, which the run names
+    and does not wait for. Once it ends, the next run compiles nothing and says nothing of it, and
+    neither does compiling (or loading) every part through the real callers (``warm_up``): the job
+    compiled them with the argument types of every run."""
+    cache = tmp_path / "cache"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "SKATETRACE_COMPILE_LATER": "1"}
     cmd = [sys.executable, "-m", "skatetrace", "trace", "line", "--out", str(tmp_path / "o"), "--no-plots",
            "--no-viewer"]
     first = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
@@ -56,9 +79,25 @@ def test_a_first_run_compiles_only_what_it_needs_and_says_so(tmp_path):
     assert "  compiling the verification's parts alongside, in a second process\n" in first.stderr
     for part in ("the verifying replay", "the distance checks"):
         assert (f"  compiling {part}\n" in first.stderr) == (f"  compiled {part} in " in first.stderr)
-    assert "closed-loop" not in first.stderr and "Riccati" not in first.stderr and "finish" not in first.stderr
+    for part in compiled.LATER:
+        assert f"  compiling {part}\n" not in first.stderr and f"  compiled {part} in " not in first.stderr
+    later = "  compiling for later runs, in the background at the lowest priority: " + ", ".join(compiled.LATER)
+    assert later + "\n" in first.stderr
+    assert _job_done(cache)
     again = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
     assert "compil" not in again.stderr
+    code = ("import skatetrace.cli.compiled as c; parts = []; c.warm_up(lambda p, i, n: parts.append(p)); "
+            "print(parts, c.cache_is_warm())")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[] True"
+
+
+def test_no_job_for_later_runs_where_it_is_turned_off_or_nothing_is_missing(monkeypatch):
+    monkeypatch.setenv("SKATETRACE_COMPILE_LATER", "0")
+    assert compiled.compile_later() == ()
+    monkeypatch.setenv("SKATETRACE_COMPILE_LATER", "1")
+    monkeypatch.setattr(compiled, "_part_is_cached", lambda part: True)
+    assert compiled.compile_later() == ()
 
 
 @pytest.mark.slow

@@ -21,6 +21,10 @@ the law's Riccati equation or the planner's finish: 13 s instead of 28 s on a fi
 build, a ``postinstall`` step) can pay that once, ahead of any real work. :func:`compile_ahead`
 compiles the verification's parts in a forked process while the run traces (and compiles the
 integrator): on two cores a first double flower then takes the integrator's time, not the sum.
+:func:`compile_later` compiles the parts such a run does not need (the planner's finish, the
+closed loop and its law, the spirals) in a job at the lowest priority that outlives the run, so
+that the next command finds them compiled. Processes that compile at once save into numba's cache
+one at a time (:mod:`skatetrace.dynamics.numba_cache`).
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from importlib import import_module
 
-__all__ = ["ENTRY_POINTS", "cache_is_warm", "compile_ahead", "reporting", "warm_up"]
+__all__ = ["ENTRY_POINTS", "LATER", "cache_is_warm", "compile_ahead", "compile_later", "reporting", "warm_up"]
 
 #: The compiled functions called from Python, by part: compiling them compiles everything they call.
 ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
@@ -160,6 +164,31 @@ def _exercise_distances() -> None:
     figure_to_replay(np.array([[0.5, 1.5], [0.1, 0.1]]), rep, np.arange(n), SleighParams())
 
 
+def _exercise_law_replay() -> None:
+    """The closed-loop replay over one span of a two-row reference under a law of zero gains, through
+    :func:`~skatetrace.feedback.law_replay.replay_span` (so with the argument types of every closed loop)."""
+    import numpy as np
+
+    from ..dynamics.model import SleighParams
+    from ..feedback.law_replay import replay_span
+
+    z = np.zeros((7, 2))
+    z[1] = 1.0  # gliding ahead on a line
+    arrays = (np.array([0.0, 1.0]), z, np.zeros((7, 2)), np.array([0.0, 1.0]), np.zeros((2, 2, 7)))
+    replay_span(arrays, SleighParams(), z[:, 0], (0.0, 1.0), [0.0, 1.0], rtol=1e-6, atol=1e-9, max_nfev=10_000)
+
+
+def _exercise_riccati() -> None:
+    """The tracking law's Riccati equation over two rows of a zero linearisation, through
+    :func:`~skatetrace.feedback.riccati.solve_backwards` (so with the argument types of every law's design)."""
+    import numpy as np
+
+    from ..feedback.riccati import solve_backwards
+
+    t = np.array([0.0, 1.0])
+    solve_backwards(t, np.zeros((2, 7, 7)), np.zeros((2, 7, 2)), np.ones(2), t, rtol=1e-6, atol=1e-9, max_nfev=10_000)
+
+
 #: What compiles each part that :func:`compile_ahead` can compile on its own (without a trace).
 _EXERCISES = {"the verifying replay": _exercise_replay, "the distance checks": _exercise_distances}
 
@@ -200,6 +229,93 @@ def compile_ahead(parts: tuple[str, ...] = tuple(_EXERCISES)):
                                                           name="skatetrace-compile-ahead")
     process.start()
     return process
+
+
+#: The parts a launch-glide-stop trace does not need, in the order :func:`compile_later` compiles
+#: them: the planner's finish (every school figure is planned by default), the closed loop and its
+#: law (an ill-conditioned section's verification, ``skatetrace robustness``), the spirals (exact mode).
+LATER = ("the planner's exact finish", "the closed-loop replay", "the tracking law's Riccati equation",
+         "the spirals' geometry")
+#: A job of :func:`compile_later` still running after this many seconds is stopped (it takes some 12 s
+#: of one core).
+LATER_TIMEOUT = 600
+#: The lock a job of :func:`compile_later` holds while it runs, in the integrator's folder of numba's cache.
+LATER_LOCK = "skatetrace-compile-later.lock"
+
+
+def compile_later() -> tuple[str, ...]:
+    """Compile the parts of :data:`LATER` missing from numba's cache in a job of its own, for later runs.
+
+    A first run compiles only the parts it needs (:func:`compile_ahead`, :func:`reporting`); the
+    next command may need others, and would spend seconds compiling them (a first planned school
+    figure 5 s on the finish, a first closed loop 6-7 s). The job compiles them meanwhile, each
+    through its own callers on tiny inputs (so with the argument types of every run), skipping a
+    part that is cached by the time it comes to it (a run compiled it meanwhile). It runs at the
+    lowest priority (``nice``) in the run's session, so it takes only what the run leaves of the
+    processors; it ignores Ctrl-C, outlives the run (the shell that starts it ends at once, so no
+    child is left to this process), holds :data:`LATER_LOCK` while it runs (a second run starts no
+    second job), and is stopped after :data:`LATER_TIMEOUT` seconds. Its output goes nowhere: a part
+    it fails to compile is compiled by the run that needs it, as without the job. The answers never
+    depend on it.
+
+    Returns
+    -------
+    tuple of str
+        The parts the job was started for, in order; empty where none was started: every part
+        cached, the cache's state unknown, a job already running for this cache, JIT compilation
+        disabled, no POSIX shell, or ``SKATETRACE_COMPILE_LATER=0`` in the environment.
+    """
+    import os
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from numba.core.config import DISABLE_JIT
+
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        return ()
+    enabled = os.environ.get("SKATETRACE_COMPILE_LATER", "1").strip().lower() not in ("0", "no", "false", "off")
+    sh = shutil.which("sh")
+    if DISABLE_JIT or not enabled or sh is None:
+        return ()
+    try:
+        todo = tuple(p for p in LATER if not _part_is_cached(p))
+        folder = Path(next(d for p, d in _dispatchers() if p == ENTRY_POINTS[0][0])._cache.cache_path)
+    except Exception:  # numba's private cache layout is not an API: never fail a run over it
+        return ()
+    if not todo:
+        return ()
+    command = [sys.executable, "-c", f"from skatetrace.cli.compiled import _compile_later; _compile_later({todo!r})"]
+    for prefix in (["timeout", str(LATER_TIMEOUT)], ["nice", "-n", "19"]):
+        if shutil.which(prefix[0]):
+            command = prefix + command
+    try:
+        with open(folder / LATER_LOCK, "a+b") as lock:  # the job keeps its own copy, and the lock
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                return ()  # a job is compiling into this cache already
+            subprocess.run([sh, "-c", 'trap "" INT; "$@" &', "sh", *command], pass_fds=(lock.fileno(),),
+                           stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                           check=True, timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        return ()
+    return todo
+
+
+def _compile_later(parts: tuple[str, ...]) -> None:
+    """The job of :func:`compile_later`: each of ``parts`` not yet cached, in order."""
+    exercises = {"the planner's exact finish": _finish_at_rest, "the closed-loop replay": _exercise_law_replay,
+                 "the tracking law's Riccati equation": _exercise_riccati, "the spirals' geometry": _spiral_distance}
+    for part in parts:
+        try:
+            if not _part_is_cached(part):
+                exercises[part]()
+        except Exception:  # noqa: S112 - nobody to tell: the run that needs the part compiles it
+            continue
 
 
 def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
