@@ -135,7 +135,11 @@ def segment_end(M, m, I, y_start, sig, times, uu, i0, i1, ends, coef, rtol, atol
         alpha = (uu[k + 1] - uu[k]) / h
         _j, kappas, switches = legs_from(ends_k, coef, s_abs)
         y[4] = 0.0  # each interval from its own start
-        res = _integrate(M, m, I, y, kappas, switches, alpha, uu[k], h, rtol, atol, False, 0.0, MAX_NFEV, False)
+        # no events, no dense output, the usual budget: made at run time, not written as literals,
+        # so that this is the trace's own compiled integrator, loaded from numba's cache (literal
+        # arguments made numba compile a second one into the finish: 2 of its 6 s on a first plan)
+        off = not rtol >= 0.0  # False
+        res = _integrate(M, m, I, y, kappas, switches, alpha, uu[k], h, rtol, atol, off, 0.0, MAX_NFEV + 0 * i0, off)
         if res[0] < 0:
             return False
         yf = res[3]
