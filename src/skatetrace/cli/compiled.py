@@ -236,7 +236,7 @@ def compile_ahead(parts: tuple[str, ...] = tuple(_EXERCISES)):
 #: law (an ill-conditioned section's verification, ``skatetrace robustness``), the spirals (exact mode).
 LATER = ("the planner's exact finish", "the closed-loop replay", "the tracking law's Riccati equation",
          "the spirals' geometry")
-#: A job of :func:`compile_later` still running after this many seconds is stopped (it takes some 12 s
+#: A job of :func:`compile_later` still running after this many seconds is stopped (it takes some 11 s
 #: of one core).
 LATER_TIMEOUT = 600
 #: The lock a job of :func:`compile_later` holds while it runs, in the integrator's folder of numba's cache.
@@ -248,7 +248,7 @@ def compile_later() -> tuple[str, ...]:
 
     A first run compiles only the parts it needs (:func:`compile_ahead`, :func:`reporting`); the
     next command may need others, and would spend seconds compiling them (a first planned school
-    figure 5 s on the finish, a first closed loop 6-7 s). The job compiles them meanwhile, each
+    figure 4 s on the finish, a first closed loop 6-7 s). The job compiles them meanwhile, each
     through its own callers on tiny inputs (so with the argument types of every run), skipping a
     part that is cached by the time it comes to it (a run compiled it meanwhile). It runs at the
     lowest priority (``nice``) in the run's session, so it takes only what the run leaves of the
