@@ -324,7 +324,7 @@ def _print_feasibility(done) -> None:
 def _compiling():
     """Name each part of the numerical core as this run compiles it (a first run on a machine: numba's
     cache is cold), after one line saying so; silent where everything loads from the cache."""
-    from .compiled import compile_ahead, compile_later, reporting
+    from .compiled import first_run
 
     said = []
 
@@ -335,13 +335,7 @@ def _compiling():
                   "once (later runs load them)", file=sys.stderr, flush=True)
         print(line, file=sys.stderr, flush=True)
 
-    if compile_ahead() is not None:  # a first run: the verification compiles while the run traces
-        say("  compiling the verification's parts alongside, in a second process")
-    later = compile_later()
-    if later:  # for the next commands: a planned figure, a closed loop, exact mode
-        say(f"  compiling for later runs, in the background at the lowest priority: {', '.join(later)}")
-    with reporting(lambda part, seconds: say(f"  compiling {part}" if seconds is None
-                                             else f"  compiled {part} in {seconds:.0f} s")):
+    with first_run(say):
         yield
 
 

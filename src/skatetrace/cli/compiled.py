@@ -24,7 +24,8 @@ integrator): on two cores a first double flower then takes the integrator's time
 :func:`compile_later` compiles the parts such a run does not need (the planner's finish, the
 closed loop and its law, the spirals) in a job at the lowest priority that outlives the run, so
 that the next command finds them compiled. Processes that compile at once save into numba's cache
-one at a time (:mod:`skatetrace.dynamics.numba_cache`).
+one at a time (:mod:`skatetrace.dynamics.numba_cache`). :func:`first_run` puts these together for a
+command: what it compiles, and where, told line by line.
 """
 
 from __future__ import annotations
@@ -34,7 +35,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from importlib import import_module
 
-__all__ = ["ENTRY_POINTS", "LATER", "cache_is_warm", "compile_ahead", "compile_later", "reporting", "warm_up"]
+__all__ = ["ENTRY_POINTS", "LATER", "cache_is_warm", "compile_ahead", "compile_later", "first_run", "reporting",
+           "warm_up"]
 
 #: The compiled functions called from Python, by part: compiling them compiles everything they call.
 ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
@@ -316,6 +318,24 @@ def _compile_later(parts: tuple[str, ...]) -> None:
                 exercises[part]()
         except Exception:  # noqa: S112 - nobody to tell: the run that needs the part compiles it
             continue
+
+
+@contextmanager
+def first_run(say: Callable[[str], None]) -> Iterator[None]:
+    """A run's compiling, told line by line to ``say``: nothing where every part loads from the cache.
+
+    On a first run it starts :func:`compile_ahead` and :func:`compile_later` (each said where it
+    starts), then, within the block, says each part as the run compiles it and how long it took
+    (:func:`reporting`).
+    """
+    if compile_ahead() is not None:  # the verification compiles while the run traces
+        say("  compiling the verification's parts alongside, in a second process")
+    later = compile_later()
+    if later:  # for the next commands: a planned figure, a closed loop, exact mode
+        say(f"  compiling for later runs, in the background at the lowest priority: {', '.join(later)}")
+    with reporting(lambda part, seconds: say(f"  compiling {part}" if seconds is None
+                                             else f"  compiled {part} in {seconds:.0f} s")):
+        yield
 
 
 def warm_up(progress: Callable[[str, int, int], None] | None = None) -> float:
