@@ -238,7 +238,7 @@ def compile_ahead(parts: tuple[str, ...] = tuple(_EXERCISES)):
 #: law (an ill-conditioned section's verification, ``skatetrace robustness``), the spirals (exact mode).
 LATER = ("the planner's exact finish", "the closed-loop replay", "the tracking law's Riccati equation",
          "the spirals' geometry")
-#: A job of :func:`compile_later` still running after this many seconds is stopped (it takes some 11 s
+#: A job of :func:`compile_later` still compiling after this many seconds is stopped (it takes some 11 s
 #: of one core).
 LATER_TIMEOUT = 600
 #: The lock a job of :func:`compile_later` holds while it runs, in the integrator's folder of numba's cache.
@@ -254,9 +254,11 @@ def compile_later() -> tuple[str, ...]:
     through its own callers on tiny inputs (so with the argument types of every run), skipping a
     part that is cached by the time it comes to it (a run compiled it meanwhile). It runs at the
     lowest priority (``nice``) in the run's session, so it takes only what the run leaves of the
-    processors; it ignores Ctrl-C, outlives the run (the shell that starts it ends at once, so no
-    child is left to this process), holds :data:`LATER_LOCK` while it runs (a second run starts no
-    second job), and is stopped after :data:`LATER_TIMEOUT` seconds. Its output goes nowhere: a part
+    processors, and it starts compiling only once the run (with its children) has ended, so as to
+    take nothing from the run's own work at low priority (its plots). It ignores Ctrl-C, outlives
+    the run (the shell that starts it ends at once, so no child is left to this process), holds
+    :data:`LATER_LOCK` while it runs (a second run starts no second job), and is stopped
+    :data:`LATER_TIMEOUT` seconds after it starts compiling. Its output goes nowhere: a part
     it fails to compile is compiled by the run that needs it, as without the job. The answers never
     depend on it.
 
@@ -290,19 +292,31 @@ def compile_later() -> tuple[str, ...]:
         return ()
     if not todo:
         return ()
-    command = [sys.executable, "-c", f"from skatetrace.cli.compiled import _compile_later; _compile_later({todo!r})"]
-    for prefix in (["timeout", str(LATER_TIMEOUT)], ["nice", "-n", "19"]):
-        if shutil.which(prefix[0]):
-            command = prefix + command
     try:
         with open(folder / LATER_LOCK, "a+b") as lock:  # the job keeps its own copy, and the lock
             try:
                 fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
                 return ()  # a job is compiling into this cache already
-            subprocess.run([sh, "-c", 'trap "" INT; "$@" &', "sh", *command], pass_fds=(lock.fileno(),),
-                           stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                           check=True, timeout=30)
+            # The job reads the pipe until every copy of its write end is closed: until this run
+            # (with the children it forks) has ended, so that it takes nothing from the run's own
+            # work at low priority (its plots); it imports skatetrace only then.
+            waited, running = os.pipe()
+            code = (f"import os, signal\nwhile os.read({waited}, 1):\n    pass\nsignal.alarm({LATER_TIMEOUT})\n"
+                    f"from skatetrace.cli.compiled import _compile_later\n_compile_later({todo!r})")
+            command = [sys.executable, "-c", code]
+            if shutil.which("nice"):
+                command = ["nice", "-n", "19"] + command
+            try:
+                subprocess.run([sh, "-c", 'trap "" INT; "$@" &', "sh", *command], pass_fds=(lock.fileno(), waited),
+                               stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               check=True, timeout=30)
+            except BaseException:
+                os.close(running)
+                raise
+            finally:
+                os.close(waited)
+            # ``running`` stays open, on purpose, for as long as this process runs
     except (OSError, subprocess.SubprocessError):
         return ()
     return todo
