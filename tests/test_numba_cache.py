@@ -77,3 +77,28 @@ def test_other_packages_saves_are_numbas_own(tmp_path, monkeypatch, module):
     assert len(index) == 1
     assert loaded.count(None) == 1
     assert not list(tmp_path.rglob(numba_cache.LOCK_NAME))
+
+
+@pytest.mark.parametrize("refused", ["open", "flock"])
+def test_a_save_goes_on_where_the_lock_cannot_be_had(tmp_path, monkeypatch, refused):
+    """A lock file that cannot be opened, or a file system that refuses locks: saved as numba saves."""
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path))
+
+    def refuse(*args, **kwargs):
+        raise OSError("no locks here")
+
+    if refused == "open":
+        monkeypatch.setattr(numba_cache, "open", refuse, raising=False)
+    else:
+        monkeypatch.setattr(numba_cache.fcntl, "flock", refuse)
+
+    def thrice(x):
+        return 3 * x
+
+    thrice.__module__ = "skatetrace.test_numba_cache"
+    f = njit(thrice)
+    f(2)
+    ((sig, cres),) = f.overloads.items()
+    cache = FunctionCache(f.py_func)
+    cache.save_overload(sig, cres)
+    assert tuple(cache.load_overload(sig, f.targetctx).signature.args) == tuple(sig)

@@ -26,6 +26,7 @@ packages' functions are saved as numba saves them.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 
@@ -52,7 +53,7 @@ def guard_saves() -> None:
     Idempotent: called by each module that compiles with ``cache=True`` (through the modules it
     imports), it wraps ``numba.core.caching.Cache.save_overload`` once per process. A save whose
     lock file cannot be opened (a read-only folder: numba then saves nothing there either) goes
-    on as numba's own.
+    on as numba's own, and so does one where the file system refuses the lock.
     """
     from numba.core.caching import Cache
 
@@ -70,7 +71,8 @@ def guard_saves() -> None:
         except OSError:
             return unguarded(self, sig, data)
         with lock:  # closing the file releases the lock
-            fcntl.flock(lock, fcntl.LOCK_EX)
+            with contextlib.suppress(OSError):  # a file system without locks: saved as numba saves
+                fcntl.flock(lock, fcntl.LOCK_EX)
             return unguarded(self, sig, data)
 
     save_overload._skatetrace_guarded = True
