@@ -250,17 +250,19 @@ def compile_later() -> tuple[str, ...]:
 
     A first run compiles only the parts it needs (:func:`compile_ahead`, :func:`reporting`); the
     next command may need others, and would spend seconds compiling them (a first planned school
-    figure 4 s on the finish, a first closed loop 6-7 s). The job compiles them meanwhile, each
+    figure 4 s on the finish, a first closed loop 6-7 s). The job compiles them for it, each
     through its own callers on tiny inputs (so with the argument types of every run), skipping a
-    part that is cached by the time it comes to it (a run compiled it meanwhile). It runs at the
-    lowest priority (``nice``) in the run's session, so it takes only what the run leaves of the
-    processors, and it starts compiling only once the run (with its children) has ended, so as to
-    take nothing from the run's own work at low priority (its plots). It ignores Ctrl-C, outlives
-    the run (the shell that starts it ends at once, so no child is left to this process), holds
-    :data:`LATER_LOCK` while it runs (a second run starts no second job), and is stopped
-    :data:`LATER_TIMEOUT` seconds after it starts compiling. Its output goes nowhere: a part
-    it fails to compile is compiled by the run that needs it, as without the job. The answers never
-    depend on it.
+    part that is cached by the time it comes to it (a run compiled it meanwhile).
+
+    It starts compiling once the run (with the children it forks) has ended, so as to take nothing
+    from the run's own work at low priority (its plots); where :func:`skatetrace.cli.main` is
+    called in a longer process (a notebook, the tests), once that process ends. It runs at the
+    lowest priority (``nice``) in the run's session, so it takes only what other work leaves of
+    the processors. It ignores Ctrl-C, outlives the run (the shell that starts it ends at once, so
+    no child is left to this process), holds :data:`LATER_LOCK` while it runs (a second run starts
+    no second job), and is stopped :data:`LATER_TIMEOUT` seconds after it starts compiling. Its
+    output goes nowhere: a part it fails to compile is compiled by the run that needs it, as
+    without the job. The answers never depend on it.
 
     Returns
     -------
