@@ -31,7 +31,6 @@ Run: python bench/bench_double_flower.py [N] [--cold K] [--first K] [--figure NA
 from __future__ import annotations
 
 import argparse
-import math
 import re
 import subprocess
 import sys
@@ -40,6 +39,7 @@ import time
 from pathlib import Path
 
 from skatetrace import pattern, trace_figure
+from skatetrace.cli.compiled import later_job_end
 from skatetrace.verification.verify import replay, schedule_from_trace
 
 if str(Path(__file__).resolve().parent) not in sys.path:
@@ -105,26 +105,6 @@ def cold_runs(name: str, k: int) -> dict:
             "byte_compiled": bool(compiled)}
 
 
-def _later_job_end(cache: Path, timeout: float = 300.0) -> float | None:
-    """Seconds until the run's job for later runs (``skatetrace.cli.compiled.compile_later``) ends, or None (no job)."""
-    import fcntl
-
-    from skatetrace.cli.compiled import LATER_LOCK
-
-    t0 = time.perf_counter()
-    while time.perf_counter() - t0 < timeout:
-        locks = list(cache.rglob(LATER_LOCK))
-        if not locks:
-            return None
-        with open(locks[0], "a+b") as fh:
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                return time.perf_counter() - t0
-            except OSError:
-                time.sleep(0.2)
-    return math.inf
-
-
 def _seconds(values) -> str:
     return ", ".join("none" if v is None else f"{v:.1f} s" for v in values)
 
@@ -147,7 +127,7 @@ def first_runs(name: str, k: int) -> dict:
             proc = subprocess.run(cmd + ["trace", name, "--out", str(Path(tmp) / "out")], capture_output=True,
                                   text=True, env=env)
             walls.append(time.perf_counter() - t0)
-            later.append(_later_job_end(Path(tmp) / "numba"))
+            later.append(later_job_end(Path(tmp) / "numba", timeout=300.0))
         codes.append(proc.returncode)
         compiled.append(re.findall(r"compiled (.+?) in ([0-9]+) s", proc.stderr))
     return {"command": cmd + ["trace", name, "--out", "TMP"], "runs": k, "wall": walls, "wall_median": median(walls),

@@ -1,10 +1,8 @@
 """The compiled core's cache: cold and warm as numba sees it (skatetrace.cli.compiled)."""
 
-import fcntl
 import os
 import subprocess
 import sys
-import time
 
 import pytest
 
@@ -41,23 +39,6 @@ def test_a_fresh_cache_is_cold_then_warm_in_the_next_process(tmp_path):
     assert again.stdout.split("\n")[:2] == ["True", "0 None"]
 
 
-def _job_done(cache, timeout: float = 600.0) -> bool:
-    """Wait for the job of ``compiled.compile_later`` that holds its lock in ``cache`` (numba's) to end."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        locks = list(cache.rglob(compiled.LATER_LOCK))
-        if not locks:
-            return False  # no job was started
-        with open(locks[0], "a+b") as fh:
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                return True
-            except OSError:
-                pass
-        time.sleep(0.5)
-    return False
-
-
 @pytest.mark.slow
 def test_a_first_run_compiles_only_what_it_needs_and_says_so(tmp_path):
     """A launch-glide-stop trace compiles the integrator, the replay and the distance checks, named
@@ -83,7 +64,8 @@ def test_a_first_run_compiles_only_what_it_needs_and_says_so(tmp_path):
         assert f"  compiling {part}\n" not in first.stderr and f"  compiled {part} in " not in first.stderr
     later = "  compiling for later runs, in the background at the lowest priority: " + ", ".join(compiled.LATER)
     assert later + "\n" in first.stderr
-    assert _job_done(cache)
+    waited = compiled.later_job_end(cache)
+    assert waited is not None and waited < float("inf")  # a job was started, and it ended
     again = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
     assert "compil" not in again.stderr
     code = ("import skatetrace.cli.compiled as c; parts = []; c.warm_up(lambda p, i, n: parts.append(p)); "

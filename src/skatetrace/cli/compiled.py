@@ -35,8 +35,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from importlib import import_module
 
-__all__ = ["ENTRY_POINTS", "LATER", "cache_is_warm", "compile_ahead", "compile_later", "first_run", "reporting",
-           "warm_up"]
+__all__ = ["AHEAD", "ENTRY_POINTS", "LATER", "cache_is_warm", "compile_ahead", "compile_later", "first_run",
+           "later_job_end", "reporting", "warm_up"]
 
 #: The compiled functions called from Python, by part: compiling them compiles everything they call.
 ENTRY_POINTS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
@@ -191,8 +191,8 @@ def _exercise_riccati() -> None:
     solve_backwards(t, np.zeros((2, 7, 7)), np.zeros((2, 7, 2)), np.ones(2), t, rtol=1e-6, atol=1e-9, max_nfev=10_000)
 
 
-#: What compiles each part that :func:`compile_ahead` can compile on its own (without a trace).
-_EXERCISES = {"the verifying replay": _exercise_replay, "the distance checks": _exercise_distances}
+#: The verification's parts, which :func:`compile_ahead` compiles while a first run traces.
+AHEAD = ("the verifying replay", "the distance checks")
 
 
 def _compile_parts(parts: tuple[str, ...]) -> None:
@@ -203,7 +203,7 @@ def _compile_parts(parts: tuple[str, ...]) -> None:
         _EXERCISES[part]()
 
 
-def compile_ahead(parts: tuple[str, ...] = tuple(_EXERCISES)):
+def compile_ahead(parts: tuple[str, ...] = AHEAD):
     """Compile ``parts`` of the core into numba's cache in a forked process, in the background.
 
     For a first run: the process compiles the verification's parts while the caller traces (and
@@ -326,14 +326,38 @@ def compile_later() -> tuple[str, ...]:
 
 def _compile_later(parts: tuple[str, ...]) -> None:
     """The job of :func:`compile_later`: each of ``parts`` not yet cached, in order."""
-    exercises = {"the planner's exact finish": _finish_at_rest, "the closed-loop replay": _exercise_law_replay,
-                 "the tracking law's Riccati equation": _exercise_riccati, "the spirals' geometry": _spiral_distance}
     for part in parts:
         try:
             if not _part_is_cached(part):
-                exercises[part]()
+                _EXERCISES[part]()
         except Exception:  # noqa: S112 - nobody to tell: the run that needs the part compiles it
             continue
+
+
+def later_job_end(cache, timeout: float = 600.0) -> float | None:
+    """Wait for the job of :func:`compile_later` whose lock is under ``cache`` (a folder of numba's cache) to end.
+
+    Returns the seconds waited, None where no job was started there (no lock file), or ``inf``
+    where it was still running after ``timeout`` seconds. For a test or a benchmark that runs a
+    first run in a cache of its own (``NUMBA_CACHE_DIR``) and must not remove it under the job.
+    """
+    import fcntl
+    import math
+    from pathlib import Path
+
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < timeout:
+        locks = list(Path(cache).rglob(LATER_LOCK))
+        if not locks:
+            return None
+        with open(locks[0], "a+b") as fh:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                return time.perf_counter() - t0
+            except OSError:
+                pass
+        time.sleep(0.2)
+    return math.inf
 
 
 @contextmanager
@@ -433,3 +457,10 @@ def _finish_at_rest() -> None:
     states[3] = rest.b
     finish_section(SleighParams(), [Spiral((0.0, 0.0, 0.0, 0.0), 1.0)], np.linspace(0.0, 1.0, 5), np.zeros(5), rest,
                    rest, states, max_iter=1)
+
+
+#: What compiles each part on its own, without a trace (:func:`compile_ahead`, :func:`compile_later`):
+#: through its own callers on tiny inputs, so with the argument types of every run.
+_EXERCISES = {"the verifying replay": _exercise_replay, "the distance checks": _exercise_distances,
+              "the planner's exact finish": _finish_at_rest, "the closed-loop replay": _exercise_law_replay,
+              "the tracking law's Riccati equation": _exercise_riccati, "the spirals' geometry": _spiral_distance}
